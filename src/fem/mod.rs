@@ -1,0 +1,8 @@
+//! Element kernels: shape functions, quadrature, internal force and tangent, surface
+//! loads. Pure functions of element data: no MPI, no global numbering.
+
+pub mod element;
+pub mod shape;
+pub mod surface;
+
+

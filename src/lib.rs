@@ -1,0 +1,17 @@
+//! alfe: an MPI-distributed implicit nonlinear finite-element solver for solids in
+//! contact. See `README.md` for use and `DESIGN` notes in each module for the why.
+//!
+//! Layers, bottom up: [`parallel`] (moves numbers, knows no physics), [`mesh`],
+//! [`fem`] and [`material`] (physics kernels, know no MPI), [`partition`] (METIS,
+//! ownership, distribution), [`solve`] (distributed linear algebra, nonlinear solvers,
+//! stepping), [`model`] (the distributed FE problem: assembly, constraints, loads),
+//! [`scene`] (decks), [`output`] (HDF5/XDMF, CSV, JSON), [`app`] (what `alfe run` does).
+
+pub mod error;
+pub mod fem;
+pub mod material;
+pub mod mesh;
+pub mod parallel;
+pub mod solve;
+
+pub use error::{Error, ErrorKind, Result};

@@ -1,0 +1,68 @@
+//! Constitutive models behind one seam, [`Material`].
+//!
+//! Finite-strain models return the Kirchhoff stress τ and the spatial tangent c of its
+//! Lie derivative (Simo & Hughes, *Computational Inelasticity*, §7; Bonet & Wood,
+//! *Nonlinear Continuum Mechanics for FEA*, §5–6), so that one element kernel serves
+//! hyperelastic and, later, multiplicative plastic models and F-bar. Small-strain
+//! models return the Cauchy stress and elasticity tensor from ε = sym(F − I).
+//!
+//! Voigt order everywhere: xx, yy, zz, xy, yz, xz (engineering shear strains in B).
+
+pub mod linear_elastic;
+pub mod neo_hookean;
+
+
+
+
+use nalgebra::Matrix3;
+
+/// Which strain measure the element uses with this material.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Kinematics {
+    /// ε = sym(∇u); no geometric stiffness; reference configuration throughout.
+    Small,
+    /// Total-Lagrangian finite strain with F = I + ∇_X u.
+    Finite,
+}
+
+/// Stress and tangent at one integration point.
+#[derive(Debug, Clone, Copy)]
+pub struct StressPoint {
+    /// Kirchhoff stress τ = Jσ (finite) or Cauchy stress σ (small), Voigt order.
+    pub stress: [f64; 6],
+    /// Spatial tangent c (finite) or elasticity tensor C (small), 6×6 Voigt.
+    pub tangent: [[f64; 6]; 6],
+}
+
+/// Why a material could not be evaluated (e.g. an inverted point, J ≤ 0).
+#[derive(Debug, Clone, PartialEq)]
+pub struct MaterialError(pub String);
+
+pub trait Material: Send + Sync + std::fmt::Debug {
+    fn kinematics(&self) -> Kinematics;
+    /// Number of history variables per integration point (0 for elastic models).
+    fn n_state(&self) -> usize {
+        0
+    }
+    /// Stress and tangent for deformation gradient `f`, given the converged history
+    /// `state_old`; writes the updated history into `state_new` (same length).
+    fn evaluate(
+        &self,
+        f: &Matrix3<f64>,
+        state_old: &[f64],
+        state_new: &mut [f64],
+    ) -> Result<StressPoint, MaterialError>;
+    /// Small-strain shear modulus: scales penalty and ALM stiffnesses.
+    fn shear_modulus(&self) -> f64;
+    /// Small-strain bulk modulus.
+    fn bulk_modulus(&self) -> f64;
+    /// Mass density (mass per volume in the deck's unit system).
+    fn density(&self) -> f64;
+}
+
+/// Lamé constants from Young's modulus and Poisson's ratio.
+pub fn lame(e: f64, nu: f64) -> (f64, f64) {
+    let mu = e / (2.0 * (1.0 + nu));
+    let lambda = e * nu / ((1.0 + nu) * (1.0 - 2.0 * nu));
+    (lambda, mu)
+}

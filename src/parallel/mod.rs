@@ -1,0 +1,14 @@
+//! The parallel layer: a thin seam over MPI. It moves numbers and knows no physics.
+//!
+//! Everything above it talks to [`Comm`]; [`SerialComm`] runs the same code in one
+//! process (unit tests, `cargo test` in-process), [`MpiComm`] runs it under `mpirun`.
+
+pub mod comm;
+pub mod halo;
+pub mod layout;
+pub mod mpi_comm;
+
+pub use comm::{Comm, SerialComm};
+pub use halo::HaloPlan;
+pub use layout::Layout;
+pub use mpi_comm::MpiComm;

@@ -1,0 +1,1 @@
+//! Distributed sparse linear algebra: block-sparse matrix, GMRES, block Jacobi.
