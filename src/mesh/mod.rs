@@ -48,7 +48,9 @@ impl ElemKind {
 }
 
 /// A face of an element: element index and local face number in [`ElemKind::faces`].
-#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, serde::Serialize, serde::Deserialize)]
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, serde::Serialize, serde::Deserialize,
+)]
 pub struct FaceRef {
     pub elem: usize,
     pub face: u8,
@@ -84,7 +86,10 @@ impl Mesh {
     /// Global node numbers of one face, in the face's outward order.
     pub fn face_nodes(&self, f: FaceRef) -> Vec<usize> {
         let en = self.elem_nodes(f.elem);
-        self.kinds[f.elem].faces()[f.face as usize].iter().map(|&i| en[i]).collect()
+        self.kinds[f.elem].faces()[f.face as usize]
+            .iter()
+            .map(|&i| en[i])
+            .collect()
     }
     pub fn push_elem(&mut self, kind: ElemKind, nodes: &[usize], part: u32) {
         if self.offsets.is_empty() {
@@ -105,16 +110,25 @@ impl Mesh {
             self.push_elem(other.kinds[e], &nodes, other.elem_part[e]);
         }
         for (k, v) in &other.node_groups {
-            self.node_groups.entry(k.clone()).or_default().extend(v.iter().map(|&n| n + n0));
+            self.node_groups
+                .entry(k.clone())
+                .or_default()
+                .extend(v.iter().map(|&n| n + n0));
         }
         for (k, v) in &other.face_groups {
             self.face_groups
                 .entry(k.clone())
                 .or_default()
-                .extend(v.iter().map(|f| FaceRef { elem: f.elem + e0, face: f.face }));
+                .extend(v.iter().map(|f| FaceRef {
+                    elem: f.elem + e0,
+                    face: f.face,
+                }));
         }
         for (k, v) in &other.elem_groups {
-            self.elem_groups.entry(k.clone()).or_default().extend(v.iter().map(|&e| e + e0));
+            self.elem_groups
+                .entry(k.clone())
+                .or_default()
+                .extend(v.iter().map(|&e| e + e0));
         }
     }
     /// Faces that belong to exactly one element (the boundary), sorted.
@@ -122,15 +136,55 @@ impl Mesh {
         let mut seen: std::collections::HashMap<Vec<usize>, (FaceRef, u32)> = Default::default();
         for e in 0..self.n_elems() {
             for (fi, _) in self.kinds[e].faces().iter().enumerate() {
-                let f = FaceRef { elem: e, face: fi as u8 };
+                let f = FaceRef {
+                    elem: e,
+                    face: fi as u8,
+                };
                 let mut key = self.face_nodes(f);
                 key.sort_unstable();
                 seen.entry(key).and_modify(|v| v.1 += 1).or_insert((f, 1));
             }
         }
-        let mut out: Vec<FaceRef> = seen.into_values().filter(|v| v.1 == 1).map(|v| v.0).collect();
+        let mut out: Vec<FaceRef> = seen
+            .into_values()
+            .filter(|v| v.1 == 1)
+            .map(|v| v.0)
+            .collect();
         out.sort();
         out
+    }
+    /// Signed volume of element e: positive when its node order follows the Gmsh/VTK
+    /// convention. Hex8 uses 2x2x2 Gauss points, exact for trilinear geometry.
+    pub fn elem_volume(&self, e: usize) -> f64 {
+        let x: Vec<[f64; 3]> = self.elem_nodes(e).iter().map(|&n| self.coords[n]).collect();
+        match self.kinds[e] {
+            ElemKind::Tet4 => det3(sub(x[1], x[0]), sub(x[2], x[0]), sub(x[3], x[0])) / 6.0,
+            ElemKind::Hex8 => {
+                const S: [f64; 8] = [-1.0, 1.0, 1.0, -1.0, -1.0, 1.0, 1.0, -1.0];
+                const T: [f64; 8] = [-1.0, -1.0, 1.0, 1.0, -1.0, -1.0, 1.0, 1.0];
+                const U: [f64; 8] = [-1.0, -1.0, -1.0, -1.0, 1.0, 1.0, 1.0, 1.0];
+                let g = 1.0 / 3f64.sqrt();
+                let mut vol = 0.0;
+                for q in 0..8 {
+                    let (a, b, c) = (g * S[q], g * T[q], g * U[q]);
+                    let mut j = [[0.0; 3]; 3];
+                    for i in 0..8 {
+                        let d = [
+                            S[i] * (1.0 + T[i] * b) * (1.0 + U[i] * c),
+                            T[i] * (1.0 + S[i] * a) * (1.0 + U[i] * c),
+                            U[i] * (1.0 + S[i] * a) * (1.0 + T[i] * b),
+                        ];
+                        for (col, dv) in j.iter_mut().zip(d) {
+                            for k in 0..3 {
+                                col[k] += 0.125 * dv * x[i][k];
+                            }
+                        }
+                    }
+                    vol += det3(j[0], j[1], j[2]);
+                }
+                vol
+            }
+        }
     }
     /// A 64-bit FNV-1a hash of the coordinates and connectivity: keys partition caches.
     pub fn hash(&self) -> u64 {
@@ -154,4 +208,15 @@ impl Mesh {
         }
         h
     }
+}
+
+fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+
+/// (a x b) . c
+fn det3(a: [f64; 3], b: [f64; 3], c: [f64; 3]) -> f64 {
+    (a[1] * b[2] - a[2] * b[1]) * c[0]
+        + (a[2] * b[0] - a[0] * b[2]) * c[1]
+        + (a[0] * b[1] - a[1] * b[0]) * c[2]
 }
