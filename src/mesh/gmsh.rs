@@ -1,1 +1,652 @@
-//! (being written)
+//! Reader for ASCII Gmsh MSH 4.1 files.
+//!
+//! Volume elements (hex8, tet4) become the mesh; lower-dimensional elements only define
+//! groups: every physical group gives a node group, physical surfaces also give face
+//! groups (matched to volume-element faces by node set), physical volumes element groups.
+
+use std::collections::{BTreeMap, HashMap};
+
+use super::{ElemKind, FaceRef, Mesh};
+
+/// Whitespace-separated tokens with line numbers; a double-quoted string is one token.
+/// Lazy, so a binary file is refused at its header before its bytes are looked at.
+struct Lexer<'a> {
+    s: &'a str,
+    pos: usize,
+    line: usize,
+    /// The section being read, for end-of-file messages.
+    section: &'a str,
+}
+
+impl<'a> Lexer<'a> {
+    fn next(&mut self) -> Option<(&'a str, usize)> {
+        let b = self.s.as_bytes();
+        while self.pos < b.len() && b[self.pos].is_ascii_whitespace() {
+            if b[self.pos] == b'\n' {
+                self.line += 1;
+            }
+            self.pos += 1;
+        }
+        if self.pos >= b.len() {
+            return None;
+        }
+        let start = self.pos;
+        let line = self.line;
+        if b[start] == b'"' {
+            self.pos += 1;
+            while self.pos < b.len() && b[self.pos] != b'"' && b[self.pos] != b'\n' {
+                self.pos += 1;
+            }
+            if self.pos < b.len() && b[self.pos] == b'"' {
+                self.pos += 1;
+            }
+        } else {
+            while self.pos < b.len() && !b[self.pos].is_ascii_whitespace() {
+                self.pos += 1;
+            }
+        }
+        Some((&self.s[start..self.pos], line))
+    }
+
+    fn tok(&mut self, what: &str) -> Result<(&'a str, usize), String> {
+        self.next()
+            .ok_or_else(|| format!("end of file inside ${}: expected {what}", self.section))
+    }
+
+    fn uint(&mut self, what: &str) -> Result<u64, String> {
+        let (t, line) = self.tok(what)?;
+        t.parse().map_err(|_| {
+            format!("line {line}: expected {what} (a non-negative integer), found \"{t}\"")
+        })
+    }
+
+    fn count(&mut self, what: &str) -> Result<usize, String> {
+        let (t, line) = self.tok(what)?;
+        let n: usize = t.parse().map_err(|_| {
+            format!("line {line}: expected {what} (a non-negative integer), found \"{t}\"")
+        })?;
+        // Guards allocations against garbage counts: nothing in a file is bigger than it.
+        if n > self.s.len() {
+            return Err(format!(
+                "line {line}: {what} {n} is larger than the file could hold"
+            ));
+        }
+        Ok(n)
+    }
+
+    fn int(&mut self, what: &str) -> Result<i64, String> {
+        let (t, line) = self.tok(what)?;
+        t.parse()
+            .map_err(|_| format!("line {line}: expected {what} (an integer), found \"{t}\""))
+    }
+
+    fn real(&mut self, what: &str) -> Result<f64, String> {
+        let (t, line) = self.tok(what)?;
+        match t.parse::<f64>() {
+            Ok(x) if x.is_finite() => Ok(x),
+            _ => Err(format!(
+                "line {line}: expected {what} (a finite number), found \"{t}\""
+            )),
+        }
+    }
+
+    fn skip(&mut self, n: usize, what: &str) -> Result<(), String> {
+        for _ in 0..n {
+            self.tok(what)?;
+        }
+        Ok(())
+    }
+
+    /// The closing `$End<section>` line.
+    fn end(&mut self) -> Result<(), String> {
+        let want = format!("$End{}", self.section);
+        match self.next() {
+            Some((t, _)) if t == want => Ok(()),
+            Some((t, line)) => Err(format!("line {line}: expected {want}, found \"{t}\"")),
+            None => Err(format!("end of file: expected {want}")),
+        }
+    }
+}
+
+/// Nodes per element for the Gmsh types alfe reads, with their dimension.
+fn elem_type(t: u64) -> Option<(usize, usize)> {
+    match t {
+        15 => Some((0, 1)),
+        1 => Some((1, 2)),
+        2 => Some((2, 3)),
+        3 => Some((2, 4)),
+        4 => Some((3, 4)),
+        5 => Some((3, 8)),
+        _ => None,
+    }
+}
+
+fn elem_type_name(t: u64) -> String {
+    let name = match t {
+        6 => "prism6",
+        7 => "pyramid5",
+        8 => "line3",
+        9 => "tri6",
+        10 => "quad9",
+        11 => "tet10",
+        12 => "hex27",
+        13 => "prism18",
+        14 => "pyramid14",
+        16 => "quad8",
+        17 => "hex20",
+        18 => "prism15",
+        19 => "pyramid13",
+        _ => return format!("type {t}"),
+    };
+    format!("type {t} ({name})")
+}
+
+/// Read an ASCII Gmsh MSH 4.1 file. Nodes are renumbered 0..n in order of appearance;
+/// volume elements get part index `part`.
+pub fn read_msh(text: &str, part: u32) -> Result<Mesh, String> {
+    let mut lx = Lexer {
+        s: text,
+        pos: 0,
+        line: 1,
+        section: "MeshFormat",
+    };
+
+    match lx.next() {
+        Some(("$MeshFormat", _)) => {}
+        Some((t, line)) => {
+            return Err(format!(
+                "line {line}: not a Gmsh .msh file: expected $MeshFormat, found \"{t}\""
+            ))
+        }
+        None => return Err("empty mesh file: expected $MeshFormat".to_string()),
+    }
+    let (version, line) = lx.tok("the MSH version")?;
+    if version != "4.1" {
+        return Err(format!(
+            "line {line}: MSH version {version} is not supported; alfe reads MSH 4.1 (gmsh -format msh41)"
+        ));
+    }
+    let (file_type, line) = lx.tok("the file type (0 = ASCII)")?;
+    if file_type != "0" {
+        return Err(format!("line {line}: binary .msh files are not supported; save as ASCII (gmsh -bin 0, Mesh.Binary = 0)"));
+    }
+    lx.tok("the data size")?;
+    lx.end()?;
+
+    // Physical groups: (dim, tag) -> name; (dim, entity tag) -> physical tags.
+    let mut phys_names: HashMap<(usize, i64), String> = HashMap::new();
+    let mut entity_phys: HashMap<(usize, i64), Vec<i64>> = HashMap::new();
+    let mut mesh = Mesh {
+        offsets: vec![0],
+        ..Default::default()
+    };
+    let mut node_index: HashMap<u64, usize> = HashMap::new();
+    // Lower-dimensional elements kept for groups: (dim, entity tag, element tag, line, nodes).
+    let mut group_elems: Vec<(usize, i64, u64, usize, Vec<usize>)> = Vec::new();
+    // Volume elements' (entity tag, element tag).
+    let mut vol_elems: Vec<(i64, u64)> = Vec::new();
+    let (mut seen_nodes, mut seen_elems) = (false, false);
+
+    while let Some((t, line)) = lx.next() {
+        let Some(name) = t.strip_prefix('$') else {
+            return Err(format!(
+                "line {line}: expected a section header such as $Nodes, found \"{t}\""
+            ));
+        };
+        lx.section = name;
+        match name {
+            "PhysicalNames" => {
+                let n = lx.count("the number of physical names")?;
+                for _ in 0..n {
+                    let dim = lx.count("a physical group dimension")?;
+                    let tag = lx.int("a physical group tag")?;
+                    let (q, line) = lx.tok("a quoted physical group name")?;
+                    let Some(s) = q.strip_prefix('"').and_then(|s| s.strip_suffix('"')) else {
+                        return Err(format!(
+                            "line {line}: expected a quoted physical group name, found {q}"
+                        ));
+                    };
+                    phys_names.insert((dim, tag), s.to_string());
+                }
+            }
+            "Entities" => {
+                let counts = [
+                    lx.count("the number of points")?,
+                    lx.count("the number of curves")?,
+                    lx.count("the number of surfaces")?,
+                    lx.count("the number of volumes")?,
+                ];
+                for (dim, &n) in counts.iter().enumerate() {
+                    for _ in 0..n {
+                        let tag = lx.int("an entity tag")?;
+                        // Points: x y z; others: a bounding box.
+                        for _ in 0..if dim == 0 { 3 } else { 6 } {
+                            lx.real("an entity coordinate")?;
+                        }
+                        let np = lx.count("the number of physical tags")?;
+                        let mut tags = Vec::with_capacity(np);
+                        for _ in 0..np {
+                            tags.push(lx.int("a physical tag")?.abs());
+                        }
+                        if dim > 0 {
+                            let nb = lx.count("the number of bounding entities")?;
+                            lx.skip(nb, "a bounding entity tag")?;
+                        }
+                        if !tags.is_empty() {
+                            entity_phys.insert((dim, tag), tags);
+                        }
+                    }
+                }
+            }
+            "Nodes" => {
+                seen_nodes = true;
+                let blocks = lx.count("the number of node blocks")?;
+                let total = lx.count("the number of nodes")?;
+                lx.skip(2, "the min and max node tags")?;
+                mesh.coords.reserve(total);
+                let mut tags = Vec::new();
+                for _ in 0..blocks {
+                    let edim = lx.count("an entity dimension")?;
+                    lx.int("an entity tag")?;
+                    let parametric = lx.uint("the parametric flag")? != 0;
+                    let n = lx.count("the number of nodes in the block")?;
+                    tags.clear();
+                    for _ in 0..n {
+                        let (t, line) = lx.tok("a node tag")?;
+                        let tag: u64 =
+                            t.parse().map_err(|_| format!("line {line}: expected a node tag (a positive integer), found \"{t}\""))?;
+                        if node_index
+                            .insert(tag, mesh.coords.len() + tags.len())
+                            .is_some()
+                        {
+                            return Err(format!(
+                                "line {line}: node tag {tag} appears twice in $Nodes"
+                            ));
+                        }
+                        tags.push(tag);
+                    }
+                    for _ in 0..n {
+                        let x = [
+                            lx.real("a node coordinate")?,
+                            lx.real("a node coordinate")?,
+                            lx.real("a node coordinate")?,
+                        ];
+                        if parametric {
+                            lx.skip(edim, "a parametric coordinate")?;
+                        }
+                        mesh.coords.push(x);
+                    }
+                }
+            }
+            "Elements" => {
+                seen_elems = true;
+                let blocks = lx.count("the number of element blocks")?;
+                lx.skip(3, "the element count and min and max element tags")?;
+                for _ in 0..blocks {
+                    lx.count("an entity dimension")?;
+                    let entity = lx.int("an entity tag")?;
+                    let (t, type_line) = lx.tok("an element type")?;
+                    let ty: u64 =
+                        t.parse().map_err(|_| format!("line {type_line}: expected an element type (an integer), found \"{t}\""))?;
+                    let n = lx.count("the number of elements in the block")?;
+                    let Some((dim, nn)) = elem_type(ty) else {
+                        let (what, line) = match lx.next() {
+                            Some((t, l)) if n > 0 => (format!("element {t} has"), l),
+                            _ => ("an element block has".to_string(), type_line),
+                        };
+                        return Err(format!(
+                            "line {line}: {what} {}, which alfe does not read; use first-order hex8 or tet4 volumes (Mesh.ElementOrder = 1)",
+                            elem_type_name(ty)
+                        ));
+                    };
+                    let mut nodes = Vec::with_capacity(nn);
+                    for _ in 0..n {
+                        let (t, line) = lx.tok("an element tag")?;
+                        let etag: u64 =
+                            t.parse().map_err(|_| format!("line {line}: expected an element tag (a positive integer), found \"{t}\""))?;
+                        nodes.clear();
+                        for _ in 0..nn {
+                            let (t, l) = lx.tok("a node tag")?;
+                            let ntag: u64 = t.parse().map_err(|_| {
+                                format!("line {l}: element {etag}: expected a node tag (a positive integer), found \"{t}\"")
+                            })?;
+                            let Some(&v) = node_index.get(&ntag) else {
+                                let hint = if seen_nodes {
+                                    ""
+                                } else {
+                                    " ($Nodes must come before $Elements)"
+                                };
+                                return Err(format!("line {l}: element {etag} has node tag {ntag} that is not in $Nodes{hint}"));
+                            };
+                            nodes.push(v);
+                        }
+                        if dim == 3 {
+                            let kind = if nn == 8 {
+                                ElemKind::Hex8
+                            } else {
+                                ElemKind::Tet4
+                            };
+                            mesh.push_elem(kind, &nodes, part);
+                            let e = mesh.n_elems() - 1;
+                            if mesh.elem_volume(e) <= 0.0 {
+                                return Err(format!(
+                                    "line {line}: element {etag} ({}) has zero or negative volume; its node order is inverted or it is degenerate",
+                                    kind.name()
+                                ));
+                            }
+                            vol_elems.push((entity, etag));
+                        } else if entity_phys.contains_key(&(dim, entity)) {
+                            group_elems.push((dim, entity, etag, line, nodes.clone()));
+                        }
+                    }
+                }
+            }
+            _ => {
+                // $Periodic, $NodeData, ...: not needed.
+                let want = format!("$End{name}");
+                loop {
+                    match lx.next() {
+                        Some((t, _)) if t == want => break,
+                        Some(_) => {}
+                        None => {
+                            return Err(format!("end of file: ${name} is never closed by {want}"))
+                        }
+                    }
+                }
+                continue;
+            }
+        }
+        lx.end()?;
+    }
+    if !seen_nodes || !seen_elems {
+        return Err(format!(
+            "mesh file has no ${} section",
+            if seen_nodes { "Elements" } else { "Nodes" }
+        ));
+    }
+    if mesh.n_elems() == 0 {
+        return Err("mesh file has no hex8 or tet4 volume elements; add a physical volume or set Mesh.SaveAll = 1".to_string());
+    }
+
+    let group_name = |dim: usize, tag: i64| {
+        phys_names
+            .get(&(dim, tag))
+            .cloned()
+            .unwrap_or_else(|| format!("group{tag}"))
+    };
+    let mut node_groups: BTreeMap<String, Vec<usize>> = BTreeMap::new();
+    let mut face_groups: BTreeMap<String, Vec<FaceRef>> = BTreeMap::new();
+    let mut elem_groups: BTreeMap<String, Vec<usize>> = BTreeMap::new();
+
+    for (e, &(entity, _)) in vol_elems.iter().enumerate() {
+        for &tag in entity_phys.get(&(3, entity)).into_iter().flatten() {
+            let name = group_name(3, tag);
+            node_groups
+                .entry(name.clone())
+                .or_default()
+                .extend_from_slice(mesh.elem_nodes(e));
+            elem_groups.entry(name).or_default().push(e);
+        }
+    }
+
+    let mut faces: HashMap<Vec<usize>, FaceRef> = HashMap::new();
+    if group_elems.iter().any(|g| g.0 == 2) {
+        for e in 0..mesh.n_elems() {
+            for f in 0..mesh.kinds[e].faces().len() {
+                let fr = FaceRef {
+                    elem: e,
+                    face: f as u8,
+                };
+                let mut key = mesh.face_nodes(fr);
+                key.sort_unstable();
+                faces.entry(key).or_insert(fr);
+            }
+        }
+    }
+    for (dim, entity, etag, line, nodes) in &group_elems {
+        for &tag in &entity_phys[&(*dim, *entity)] {
+            let name = group_name(*dim, tag);
+            node_groups
+                .entry(name.clone())
+                .or_default()
+                .extend_from_slice(nodes);
+            if *dim == 2 {
+                let mut key = nodes.clone();
+                key.sort_unstable();
+                let Some(&f) = faces.get(&key) else {
+                    return Err(format!(
+                        "line {line}: element {etag} of physical surface \"{name}\" is not a face of any hex8 or tet4 element"
+                    ));
+                };
+                face_groups.entry(name).or_default().push(f);
+            }
+        }
+    }
+
+    for v in node_groups.values_mut().chain(elem_groups.values_mut()) {
+        v.sort_unstable();
+        v.dedup();
+    }
+    for v in face_groups.values_mut() {
+        v.sort_unstable();
+        v.dedup();
+    }
+    mesh.node_groups = node_groups;
+    mesh.face_groups = face_groups;
+    mesh.elem_groups = elem_groups;
+    Ok(mesh)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const HEXES: &str = r#"$MeshFormat
+4.1 0 8
+$EndMeshFormat
+$PhysicalNames
+3
+0 3 "corner"
+2 1 "bottom face"
+3 2 "solid"
+$EndPhysicalNames
+$Comments
+anything "quoted" here
+$EndComments
+$Entities
+1 0 1 1
+1 0 0 0 1 3
+1 0 0 0 2 1 0 1 1 0
+1 0 0 0 2 1 1 1 2 1 -1
+$EndEntities
+$Nodes
+2 12 10 43
+0 1 0 1
+10
+0 0 0
+3 1 0 11
+13
+16
+19
+22
+25
+28
+31
+34
+37
+40
+43
+1.0e+00 0 0
+2E0 0 0
+0 1 0
+1 1 0
+2 1 0
+0 0 1
+1 0 1
+2 0 1
+0 1 1
+1 1 1
+2 1 1
+$EndNodes
+$Elements
+3 5 1 5
+0 1 15 1
+1 10
+2 1 3 2
+2 10 19 22 13
+3 13 22 25 16
+3 1 5 2
+4 10 13 22 19 28 31 40 37
+5 13 16 25 22 31 34 43 40
+$EndElements
+"#;
+
+    const TETS: &str = r#"$MeshFormat
+4.1 0 8
+$EndMeshFormat
+$Entities
+0 0 2 1
+1 0 0 0 1 1 0 1 7 0
+2 0 0 0 1 1 1 1 8 0
+3 0 0 0 1 1 1 1 9 0
+$EndEntities
+$Nodes
+1 5 1 5
+3 3 0 5
+1
+2
+3
+4
+5
+0 0 0
+1 0 0
+0 1 0
+0 0 1
+1 1 1
+$EndNodes
+$Elements
+3 4 1 4
+2 1 2 1
+1 1 2 3
+2 2 2 1
+2 4 3 2
+3 3 4 2
+3 1 2 3 4
+4 2 3 4 5
+$EndElements
+"#;
+
+    fn err(text: &str) -> String {
+        read_msh(text, 0).expect_err("should fail")
+    }
+
+    #[test]
+    fn reads_hexes_with_groups() {
+        let m = read_msh(HEXES, 3).unwrap();
+        assert_eq!(m.n_nodes(), 12);
+        assert_eq!(m.n_elems(), 2);
+        assert_eq!(m.kinds, vec![ElemKind::Hex8; 2]);
+        assert_eq!(m.elem_part, vec![3, 3]);
+        assert_eq!(m.coords[0], [0.0; 3]);
+        assert_eq!(m.coords[1], [1.0, 0.0, 0.0]);
+        assert_eq!(m.coords[2], [2.0, 0.0, 0.0]);
+        assert_eq!(m.elem_nodes(0), &[0, 1, 4, 3, 6, 7, 10, 9]);
+        assert!((m.elem_volume(1) - 1.0).abs() < 1e-12);
+        assert_eq!(m.elem_groups["solid"], vec![0, 1]);
+        assert_eq!(m.node_groups["solid"], (0..12).collect::<Vec<_>>());
+        assert_eq!(m.node_groups["corner"], vec![0]);
+        assert_eq!(m.node_groups["bottom face"], vec![0, 1, 2, 3, 4, 5]);
+        assert_eq!(
+            m.face_groups["bottom face"],
+            vec![FaceRef { elem: 0, face: 0 }, FaceRef { elem: 1, face: 0 }]
+        );
+        assert_eq!(m.face_groups.len(), 1);
+        assert_eq!(m.elem_groups.len(), 1);
+    }
+
+    #[test]
+    fn reads_tets_with_unnamed_and_interior_surfaces() {
+        let m = read_msh(TETS, 0).unwrap();
+        assert_eq!(m.kinds, vec![ElemKind::Tet4; 2]);
+        assert!(m.elem_volume(0) > 0.0 && m.elem_volume(1) > 0.0);
+        let f = m.face_groups["group7"][0];
+        let mut ns = m.face_nodes(f);
+        ns.sort();
+        assert_eq!((f.elem, ns), (0, vec![0, 1, 2]));
+        assert_eq!(m.face_groups["group8"].len(), 1);
+        assert_eq!(m.node_groups["group8"], vec![1, 2, 3]);
+        assert_eq!(m.elem_groups["group9"], vec![0, 1]);
+    }
+
+    #[test]
+    fn refuses_other_formats() {
+        let e = err(&HEXES.replace("4.1 0 8", "2.2 0 8"));
+        assert!(
+            e.contains("line 2: MSH version 2.2 is not supported"),
+            "{e}"
+        );
+        let e = err(&HEXES.replace("4.1 0 8", "4.1 1 8"));
+        assert!(
+            e.contains("line 2: binary .msh files are not supported"),
+            "{e}"
+        );
+        let e = err("$Nodes\n");
+        assert!(e.contains("not a Gmsh .msh file"), "{e}");
+    }
+
+    #[test]
+    fn malformed_files_name_the_problem() {
+        let e = err(&HEXES.replace("$EndNodes\n", ""));
+        assert!(e.contains("expected $EndNodes, found \"$Elements\""), "{e}");
+        let e = err(&HEXES.replace("2E0 0 0", "2E0 0 0.0.1"));
+        assert!(
+            e.contains("line 37: expected a node coordinate (a finite number), found \"0.0.1\""),
+            "{e}"
+        );
+        let e = err(&HEXES.replace("5 13 16 25", "5 13 99 25"));
+        assert!(
+            e.contains("element 5 has node tag 99 that is not in $Nodes"),
+            "{e}"
+        );
+        let e = err(&HEXES.replace("3 1 5 2", "3 1 11 2"));
+        assert!(
+            e.contains("element 4 has type 11 (tet10), which alfe does not read"),
+            "{e}"
+        );
+        let e = err(&HEXES.replace("3 1 5 2", "3 1 6 2"));
+        assert!(e.contains("type 6 (prism6)"), "{e}");
+        let e = err(&HEXES.replace("3 13 22 25 16", "3 13 22 40 16"));
+        assert!(
+            e.contains("element 3 of physical surface \"bottom face\" is not a face"),
+            "{e}"
+        );
+        let e = err(&TETS.replace("3 1 2 3 4", "3 1 3 2 4"));
+        assert!(
+            e.contains("element 3 (tet4) has zero or negative volume"),
+            "{e}"
+        );
+        let e = err(&HEXES[..HEXES.find("$EndElements").unwrap()]);
+        assert!(e.contains("end of file: expected $EndElements"), "{e}");
+        let e = err(&HEXES[..HEXES.find("31 34 43 40").unwrap()]);
+        assert!(
+            e.contains("end of file inside $Elements: expected a node tag"),
+            "{e}"
+        );
+        let e = err(&TETS.replace("3 3 0 5", "3 3 0 x5"));
+        assert!(
+            e.contains(
+                "expected the number of nodes in the block (a non-negative integer), found \"x5\""
+            ),
+            "{e}"
+        );
+        for e in [
+            err(&HEXES.replace("3 1 5 2", "3 1 2 2")),
+            err(&HEXES.replace(
+                "$Elements\n3 5 1 5\n",
+                "$Elements\n0 0 0 0\n$EndElements\n$Foo\n",
+            )),
+        ] {
+            assert!(!e.contains('\n'), "one line: {e}");
+        }
+    }
+}
