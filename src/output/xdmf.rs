@@ -253,3 +253,177 @@ pub fn write_xdmf(path: &Path, mesh: &XdmfMesh, steps: &[XdmfStep]) -> Result<()
     std::fs::rename(&tmp, path).map_err(ctx)?;
     Ok(())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::output::testutil::{python_json, temp_dir};
+    use crate::output::H5File;
+    use crate::parallel::SerialComm;
+
+    fn attr(name: &str, center: Center, kind: AttrKind, path: &str, n_rows: u64) -> XdmfAttr {
+        XdmfAttr {
+            name: name.into(),
+            center,
+            kind,
+            h5_path: path.into(),
+            n_rows,
+            n_cols: kind.n_cols(),
+            number_type: "Float",
+            precision: 8,
+        }
+    }
+
+    /// Parse the .xmf as XML and resolve every DataItem in the HDF5 file beside it:
+    /// report the grids, and for each DataItem whether the dataset exists with exactly
+    /// the declared dimensions and a matching number type.
+    const CHECK: &str = r#"
+import sys, os, json, h5py
+import xml.etree.ElementTree as ET
+xmf = sys.argv[1]
+root = ET.parse(xmf).getroot()
+assert root.tag == "Xdmf" and root.get("Version") == "3.0"
+coll = root.find("Domain/Grid")
+out = {"collection": [coll.get("GridType"), coll.get("CollectionType")], "grids": []}
+for g in coll.findall("Grid"):
+    grid = {"name": g.get("Name"), "time": float(g.find("Time").get("Value")),
+            "geometry": g.find("Geometry").get("GeometryType"),
+            "topology": [g.find("Topology").get("TopologyType"),
+                         int(g.find("Topology").get("NumberOfElements"))],
+            "attrs": [], "items": []}
+    for a in g.findall("Attribute"):
+        grid["attrs"].append([a.get("Name"), a.get("AttributeType"), a.get("Center")])
+    for d in g.iter("DataItem"):
+        fname, path = d.text.strip().split(":", 1)
+        dims = [int(x) for x in d.get("Dimensions").split()]
+        with h5py.File(os.path.join(os.path.dirname(xmf), fname), "r") as f:
+            ds = f[path]
+            kind = {"Float": "f", "Int": "i", "UInt": "u"}[d.get("NumberType")]
+            ok = list(ds.shape) == dims and ds.dtype.kind == kind \
+                 and ds.dtype.itemsize == int(d.get("Precision"))
+        grid["items"].append([path, dims, ok])
+    out["grids"].append(grid)
+print(json.dumps(out))
+"#;
+
+    #[test]
+    fn xdmf_is_well_formed_and_matches_the_hdf5_datasets() {
+        let dir = temp_dir("xdmf-match");
+        let h5 = dir.join("run.h5");
+        let (n_nodes, n_elems) = (12u64, 2u64);
+        let f = H5File::create(&SerialComm, &h5).unwrap();
+        f.write_rows_f64(COORDINATES, n_nodes, 3, 0, &vec![0.0; 36]).unwrap();
+        f.write_rows_i64(CONNECTIVITY, n_elems, 8, 0, &[0; 16]).unwrap();
+        f.write_rows_i32("/mesh/partition", n_elems, 1, 0, &[0, 1]).unwrap();
+        let mut steps = Vec::new();
+        for (k, t) in [0.5, 1.0e-7].into_iter().enumerate() {
+            let g = format!("/steps/{k:06}");
+            f.write_rows_f64(&format!("{g}/displacement"), n_nodes, 3, 0, &[1.0; 36]).unwrap();
+            f.write_rows_f64(&format!("{g}/stress"), n_elems, 6, 0, &[2.0; 12]).unwrap();
+            f.write_rows_f64(&format!("{g}/von_mises"), n_elems, 1, 0, &[3.0; 2]).unwrap();
+            f.write_attr_f64(&g, "time", t).unwrap();
+            steps.push(XdmfStep {
+                time: t,
+                attrs: vec![
+                    attr("displacement", Center::Node, AttrKind::Vector, &format!("{g}/displacement"), n_nodes),
+                    attr("stress", Center::Cell, AttrKind::Tensor6, &format!("{g}/stress"), n_elems),
+                    attr("von_mises", Center::Cell, AttrKind::Scalar, &format!("{g}/von_mises"), n_elems),
+                ],
+            });
+        }
+        drop(f);
+        let mesh = XdmfMesh {
+            h5_file_name: "run.h5".into(),
+            n_nodes,
+            n_elems,
+            topology: XdmfTopology::Hexahedron,
+            static_cell_attrs: vec![XdmfAttr {
+                number_type: "Int",
+                precision: 4,
+                ..attr("partition", Center::Cell, AttrKind::Scalar, "/mesh/partition", n_elems)
+            }],
+        };
+        let xmf = dir.join("run.xmf");
+        // After the first step, then again after the second (the file is rewritten whole).
+        write_xdmf(&xmf, &mesh, &steps[..1]).unwrap();
+        let j = python_json(CHECK, &[xmf.to_str().unwrap()]);
+        assert_eq!(j["grids"].as_array().unwrap().len(), 1);
+        write_xdmf(&xmf, &mesh, &steps).unwrap();
+        assert!(!dir.join("run.xmf.tmp").exists());
+
+        let j = python_json(CHECK, &[xmf.to_str().unwrap()]);
+        assert_eq!(j["collection"], serde_json::json!(["Collection", "Temporal"]));
+        let grids = j["grids"].as_array().unwrap();
+        assert_eq!(grids.len(), 2);
+        assert_eq!(grids[0]["time"], 0.5);
+        assert_eq!(grids[1]["time"], 1.0e-7);
+        for (k, g) in grids.iter().enumerate() {
+            assert_eq!(g["geometry"], "XYZ");
+            assert_eq!(g["topology"], serde_json::json!(["Hexahedron", 2]));
+            assert_eq!(
+                g["attrs"],
+                serde_json::json!([
+                    ["partition", "Scalar", "Cell"],
+                    ["displacement", "Vector", "Node"],
+                    ["stress", "Tensor6", "Cell"],
+                    ["von_mises", "Scalar", "Cell"]
+                ])
+            );
+            let s = format!("/steps/{k:06}");
+            assert_eq!(
+                g["items"],
+                serde_json::json!([
+                    ["/mesh/coordinates", [12, 3], true],
+                    ["/mesh/connectivity", [2, 8], true],
+                    ["/mesh/partition", [2], true],
+                    [format!("{s}/displacement"), [12, 3], true],
+                    [format!("{s}/stress"), [2, 6], true],
+                    [format!("{s}/von_mises"), [2], true]
+                ])
+            );
+        }
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn topologies_escaping_and_validation() {
+        let mut mesh = XdmfMesh {
+            h5_file_name: "a&b.h5".into(),
+            n_nodes: 5,
+            n_elems: 2,
+            topology: XdmfTopology::Tetrahedron,
+            static_cell_attrs: vec![],
+        };
+        let steps = vec![XdmfStep {
+            time: 2.0,
+            attrs: vec![attr("p<1>", Center::Node, AttrKind::Scalar, "/s/p", 5)],
+        }];
+        let t = xdmf_text(&mesh, &steps).unwrap();
+        assert!(t.contains("TopologyType=\"Tetrahedron\" NumberOfElements=\"2\""), "{t}");
+        assert!(t.contains("Dimensions=\"2 4\""), "{t}");
+        assert!(t.contains("a&amp;b.h5:/s/p") && t.contains("Name=\"p&lt;1&gt;\""), "{t}");
+        assert!(t.contains("<Time Value=\"2.0\"/>"), "{t}");
+
+        mesh.topology = XdmfTopology::Mixed { n_entries: 14 };
+        let t = xdmf_text(&mesh, &steps).unwrap();
+        assert!(t.contains("TopologyType=\"Mixed\" NumberOfElements=\"2\""), "{t}");
+        assert!(t.contains("Dimensions=\"14\" NumberType=\"Int\" Precision=\"8\" Format=\"HDF\">a&amp;b.h5:/mesh/connectivity"), "{t}");
+
+        // No steps yet: still a valid, empty collection.
+        let t = xdmf_text(&mesh, &[]).unwrap();
+        assert!(t.contains("CollectionType=\"Temporal\">\n    </Grid>"), "{t}");
+
+        let bad_rows = vec![XdmfStep {
+            time: 0.0,
+            attrs: vec![attr("u", Center::Node, AttrKind::Vector, "/s/u", 2)],
+        }];
+        let e = xdmf_text(&mesh, &bad_rows).unwrap_err();
+        assert!(e.message.contains("'u'") && e.message.contains("2 rows"), "{e}");
+        let mut bad_cols = attr("s", Center::Cell, AttrKind::Tensor6, "/s/s", 2);
+        bad_cols.n_cols = 9;
+        let e = xdmf_text(&mesh, &[XdmfStep { time: 0.0, attrs: vec![bad_cols] }]).unwrap_err();
+        assert!(e.message.contains("9 columns"), "{e}");
+        let e = xdmf_text(&mesh, &[XdmfStep { time: f64::NAN, attrs: vec![] }]).unwrap_err();
+        assert!(e.message.contains("not finite"), "{e}");
+    }
+}
