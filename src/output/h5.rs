@@ -31,8 +31,7 @@ use hdf5_sys::h5l::H5Lexists;
 use hdf5_sys::h5o::{H5Oclose, H5Oopen};
 use hdf5_sys::h5p::{
     H5FD_mpio_xfer_t, H5Pclose, H5Pcreate, H5Pset_create_intermediate_group, H5Pset_dxpl_mpio,
-    H5Pset_fapl_mpio, H5P_CLS_DATASET_XFER, H5P_CLS_FILE_ACCESS, H5P_CLS_LINK_CREATE,
-    H5P_DEFAULT,
+    H5Pset_fapl_mpio, H5P_CLS_DATASET_XFER, H5P_CLS_FILE_ACCESS, H5P_CLS_LINK_CREATE, H5P_DEFAULT,
 };
 use hdf5_sys::h5s::{
     H5S_class_t, H5S_seloper_t, H5Sclose, H5Screate, H5Screate_simple, H5Sselect_hyperslab,
@@ -43,9 +42,20 @@ use hdf5_sys::h5t::{
     H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, H5T_NATIVE_INT32, H5T_NATIVE_INT64, H5T_STD_I32LE,
     H5T_STD_I64LE,
 };
-use std::ffi::{c_char, c_uint, c_void, CStr, CString};
+use std::cell::Cell;
+use std::ffi::{c_char, c_int, c_uint, c_void, CStr, CString};
 use std::path::{Path, PathBuf};
 use std::sync::Once;
+
+unsafe extern "C" {
+    /// Not bound by hdf5-sys: how the last `H5Dwrite` with this transfer list was done
+    /// (an `H5D_mpio_actual_io_mode_t`, a C enum).
+    fn H5Pget_mpio_actual_io_mode(dxpl_id: hid_t, actual_io_mode: *mut c_int) -> herr_t;
+}
+
+/// `H5D_MPIO_CONTIGUOUS_COLLECTIVE`: what a collective write to a contiguous dataset reports.
+const CONTIGUOUS_COLLECTIVE: c_int =
+    hdf5_sys::h5d::H5D_mpio_actual_io_mode_t::H5D_MPIO_CONTIGUOUS_COLLECTIVE as c_int;
 
 /// Initialise the library once per process and silence HDF5's own error printing:
 /// failures come back as one-line [`Error`]s instead.
@@ -63,7 +73,10 @@ fn hdf5_detail() -> String {
     unsafe extern "C" fn first(_n: c_uint, e: *const H5E_error2_t, data: *mut c_void) -> herr_t {
         let out = &mut *(data as *mut Option<String>);
         if out.is_none() && !e.is_null() && !(*e).desc.is_null() {
-            let d = CStr::from_ptr((*e).desc).to_string_lossy().trim().to_string();
+            let d = CStr::from_ptr((*e).desc)
+                .to_string_lossy()
+                .trim()
+                .to_string();
             if !d.is_empty() {
                 *out = Some(d);
             }
@@ -72,7 +85,12 @@ fn hdf5_detail() -> String {
     }
     let mut out: Option<String> = None;
     unsafe {
-        H5Ewalk2(H5E_DEFAULT, H5E_WALK_UPWARD, Some(first), &mut out as *mut _ as *mut c_void);
+        H5Ewalk2(
+            H5E_DEFAULT,
+            H5E_WALK_UPWARD,
+            Some(first),
+            &mut out as *mut _ as *mut c_void,
+        );
         H5Eclear2(H5E_DEFAULT);
     }
     out.unwrap_or_else(|| "no HDF5 detail".to_string())
@@ -144,6 +162,8 @@ pub struct H5File {
     /// Our own duplicate of the communicator, for agreeing on argument errors.
     comm: Option<mpi::ffi::MPI_Comm>,
     path: PathBuf,
+    /// Dataset writes that HDF5 reports it did not do collectively (MPI runs only).
+    not_collective: Cell<u64>,
 }
 
 fn cstring(what: &str, s: &str) -> Result<CString> {
@@ -160,7 +180,10 @@ impl H5File {
         let cpath = {
             use std::os::unix::ffi::OsStrExt;
             CString::new(path.as_os_str().as_bytes()).map_err(|_| {
-                Error::runtime(format!("HDF5: file name {} contains a NUL byte", path.display()))
+                Error::runtime(format!(
+                    "HDF5: file name {} contains a NUL byte",
+                    path.display()
+                ))
             })?
         };
         let fail = |what: &str| {
@@ -176,7 +199,10 @@ impl H5File {
             if fapl < 0 {
                 return Err(fail("H5Pcreate(file access)"));
             }
-            let fapl = Handle { id: fapl, close: H5Pclose };
+            let fapl = Handle {
+                id: fapl,
+                close: H5Pclose,
+            };
             if let Some(c) = raw {
                 if H5Pset_fapl_mpio(fapl.id, c, mpi::ffi::RSMPI_INFO_NULL) < 0 {
                     return Err(fail("H5Pset_fapl_mpio"));
@@ -186,13 +212,19 @@ impl H5File {
             if file < 0 {
                 return Err(fail("H5Fcreate"));
             }
-            let file = Handle { id: file, close: H5Fclose };
+            let file = Handle {
+                id: file,
+                close: H5Fclose,
+            };
             let dxpl = if raw.is_some() {
                 let d = H5Pcreate(*H5P_CLS_DATASET_XFER);
                 if d < 0 {
                     return Err(fail("H5Pcreate(dataset transfer)"));
                 }
-                let d = Handle { id: d, close: H5Pclose };
+                let d = Handle {
+                    id: d,
+                    close: H5Pclose,
+                };
                 if H5Pset_dxpl_mpio(d.id, H5FD_mpio_xfer_t::H5FD_MPIO_COLLECTIVE) < 0 {
                     return Err(fail("H5Pset_dxpl_mpio(collective)"));
                 }
@@ -204,7 +236,10 @@ impl H5File {
             if lcpl < 0 {
                 return Err(fail("H5Pcreate(link create)"));
             }
-            let lcpl = Handle { id: lcpl, close: H5Pclose };
+            let lcpl = Handle {
+                id: lcpl,
+                close: H5Pclose,
+            };
             if H5Pset_create_intermediate_group(lcpl.id, 1) < 0 {
                 return Err(fail("H5Pset_create_intermediate_group"));
             }
@@ -228,6 +263,7 @@ impl H5File {
                 lcpl: lcpl.id,
                 comm: dup,
                 path: path.to_path_buf(),
+                not_collective: Cell::new(0),
             };
             std::mem::forget(file);
             std::mem::forget(lcpl);
@@ -244,7 +280,11 @@ impl H5File {
     }
 
     fn err(&self, what: String) -> Error {
-        Error::runtime(format!("HDF5 {}: {what}: {}", self.path.display(), hdf5_detail()))
+        Error::runtime(format!(
+            "HDF5 {}: {what}: {}",
+            self.path.display(),
+            hdf5_detail()
+        ))
     }
 
     /// True on every rank iff `ok` on every rank (identity for a serial file).
@@ -269,6 +309,13 @@ impl H5File {
         }
     }
 
+    /// How many dataset writes on this rank HDF5 reports it did *not* do as one
+    /// collective MPI-IO operation (always 0 for a serial file). A check for tests and
+    /// logs: a type conversion or a chunked layout could make HDF5 fall back silently.
+    pub fn independent_writes(&self) -> u64 {
+        self.not_collective.get()
+    }
+
     /// Collective: create a group and any missing parents (e.g. "/steps/000003").
     /// A group that already exists is not an error.
     pub fn create_group(&self, path: &str) -> Result<()> {
@@ -278,7 +325,13 @@ impl H5File {
             return Ok(());
         }
         unsafe {
-            let g = H5Gcreate2(self.file, cpath.as_ptr(), self.lcpl, H5P_DEFAULT, H5P_DEFAULT);
+            let g = H5Gcreate2(
+                self.file,
+                cpath.as_ptr(),
+                self.lcpl,
+                H5P_DEFAULT,
+                H5P_DEFAULT,
+            );
             if g < 0 {
                 return Err(self.err(format!("cannot create group '{path}'")));
             }
@@ -361,13 +414,19 @@ impl H5File {
         let _g = hdf5_sys::LOCK.lock();
         // Check the arguments locally, then agree, so that a bad call on one rank
         // fails on every rank before any collective HDF5 call.
-        let local_rows = if n_cols == 0 { 0 } else { data.len() as u64 / n_cols };
+        let local_rows = (data.len() as u64).checked_div(n_cols).unwrap_or(0);
         let problem = if n_cols == 0 {
             Some("n_cols is 0".to_string())
-        } else if data.len() as u64 % n_cols != 0 {
-            Some(format!("{} values are not whole rows of {n_cols}", data.len()))
+        } else if !(data.len() as u64).is_multiple_of(n_cols) {
+            Some(format!(
+                "{} values are not whole rows of {n_cols}",
+                data.len()
+            ))
         } else if local_rows > 0 && row0.checked_add(local_rows).is_none_or(|e| e > n_rows) {
-            Some(format!("rows {row0}..{} outside 0..{n_rows}", row0.saturating_add(local_rows)))
+            Some(format!(
+                "rows {row0}..{} outside 0..{n_rows}",
+                row0.saturating_add(local_rows)
+            ))
         } else if path.is_empty() || path.contains('\0') {
             Some(format!("bad dataset path {path:?}"))
         } else {
@@ -399,7 +458,10 @@ impl H5File {
             if fspace < 0 {
                 return Err(self.err(ds(&format!("H5Screate_simple({n_rows} x {n_cols})"))));
             }
-            let fspace = Handle { id: fspace, close: H5Sclose };
+            let fspace = Handle {
+                id: fspace,
+                close: H5Sclose,
+            };
             let dset = H5Dcreate2(
                 self.file,
                 cpath.as_ptr(),
@@ -412,12 +474,18 @@ impl H5File {
             if dset < 0 {
                 return Err(self.err(ds("H5Dcreate2")));
             }
-            let dset = Handle { id: dset, close: H5Dclose };
+            let dset = Handle {
+                id: dset,
+                close: H5Dclose,
+            };
             let mspace = H5Screate_simple(rank, mem_dims.as_ptr(), std::ptr::null());
             if mspace < 0 {
                 return Err(self.err(ds("H5Screate_simple(memory)")));
             }
-            let mspace = Handle { id: mspace, close: H5Sclose };
+            let mspace = Handle {
+                id: mspace,
+                close: H5Sclose,
+            };
             if local_rows == 0 {
                 if H5Sselect_none(fspace.id) < 0 || H5Sselect_none(mspace.id) < 0 {
                     return Err(self.err(ds("H5Sselect_none")));
@@ -449,6 +517,15 @@ impl H5File {
             if H5Dwrite(dset.id, T::mem_type(), mspace.id, fspace.id, self.dxpl, buf) < 0 {
                 return Err(self.err(ds(&format!("H5Dwrite(rows {row0}..{})", row0 + local_rows))));
             }
+            if self.comm.is_some() {
+                let mut mode: c_int = -1;
+                if H5Pget_mpio_actual_io_mode(self.dxpl, &mut mode) < 0
+                    || mode != CONTIGUOUS_COLLECTIVE
+                {
+                    H5Eclear2(H5E_DEFAULT);
+                    self.not_collective.set(self.not_collective.get() + 1);
+                }
+            }
         }
         Ok(())
     }
@@ -470,7 +547,10 @@ impl H5File {
             if o < 0 {
                 return Err(self.err(at("H5Oopen")));
             }
-            let o = Handle { id: o, close: H5Oclose };
+            let o = Handle {
+                id: o,
+                close: H5Oclose,
+            };
             let exists = H5Aexists(o.id, cname.as_ptr());
             if exists < 0 {
                 return Err(self.err(at("H5Aexists")));
@@ -482,12 +562,25 @@ impl H5File {
             if space < 0 {
                 return Err(self.err(at("H5Screate(scalar)")));
             }
-            let space = Handle { id: space, close: H5Sclose };
-            let a = H5Acreate2(o.id, cname.as_ptr(), ftype, space.id, H5P_DEFAULT, H5P_DEFAULT);
+            let space = Handle {
+                id: space,
+                close: H5Sclose,
+            };
+            let a = H5Acreate2(
+                o.id,
+                cname.as_ptr(),
+                ftype,
+                space.id,
+                H5P_DEFAULT,
+                H5P_DEFAULT,
+            );
             if a < 0 {
                 return Err(self.err(at("H5Acreate2")));
             }
-            let a = Handle { id: a, close: H5Aclose };
+            let a = Handle {
+                id: a,
+                close: H5Aclose,
+            };
             if H5Awrite(a.id, mtype, buf) < 0 {
                 return Err(self.err(at("H5Awrite")));
             }
@@ -518,14 +611,23 @@ impl H5File {
             if t < 0 {
                 return Err(self.err(format!("attribute '{name}' on '{obj}' H5Tcopy")));
             }
-            let t = Handle { id: t, close: H5Tclose };
+            let t = Handle {
+                id: t,
+                close: H5Tclose,
+            };
             if H5Tset_size(t.id, bytes.len()) < 0
                 || H5Tset_strpad(t.id, H5T_str_t::H5T_STR_NULLTERM) < 0
                 || H5Tset_cset(t.id, H5T_cset_t::H5T_CSET_UTF8) < 0
             {
                 return Err(self.err(format!("attribute '{name}' on '{obj}' string type")));
             }
-            self.write_attr(obj, name, t.id, t.id, bytes.as_ptr() as *const c_char as *const c_void)
+            self.write_attr(
+                obj,
+                name,
+                t.id,
+                t.id,
+                bytes.as_ptr() as *const c_char as *const c_void,
+            )
         }
     }
 
@@ -602,14 +704,19 @@ print(json.dumps(out))
             f.create_group("/steps/000001").unwrap(); // exists: fine
             f.create_group("/steps").unwrap();
             let coords: Vec<f64> = (0..12).map(|i| i as f64 * 0.5).collect();
-            f.write_rows_f64("/mesh/coordinates", 4, 3, 0, &coords).unwrap();
+            f.write_rows_f64("/mesh/coordinates", 4, 3, 0, &coords)
+                .unwrap();
             let conn: Vec<i64> = (0..16).map(|i| (i * 3) % 11 + (1 << 40)).collect();
-            f.write_rows_i64("/mesh/connectivity", 2, 8, 0, &conn).unwrap();
-            f.write_rows_i32("/mesh/partition", 2, 1, 0, &[0, -7]).unwrap();
+            f.write_rows_i64("/mesh/connectivity", 2, 8, 0, &conn)
+                .unwrap();
+            f.write_rows_i32("/mesh/partition", 2, 1, 0, &[0, -7])
+                .unwrap();
             // Only rows 1..3 of 4 from this "rank": the others keep the fill value 0.
-            f.write_rows_f64("/steps/000001/von_mises", 4, 1, 1, &[1.5, -2.25]).unwrap();
+            f.write_rows_f64("/steps/000001/von_mises", 4, 1, 1, &[1.5, -2.25])
+                .unwrap();
             // A dataset no rank has rows of.
-            f.write_rows_f64("/steps/000001/contact", 0, 6, 0, &[]).unwrap();
+            f.write_rows_f64("/steps/000001/contact", 0, 6, 0, &[])
+                .unwrap();
             f.write_attr_f64("/steps/000001", "time", 0.125).unwrap();
             f.write_attr_f64("/steps/000001", "time", 0.25).unwrap(); // replaces
             f.write_attr_str("/", "program", "alfe \u{e9}").unwrap();
@@ -633,7 +740,10 @@ print(json.dumps(out))
         let v = &j["/steps/000001/von_mises"];
         assert_eq!(v["shape"], serde_json::json!([4]));
         assert_eq!(v["data"], serde_json::json!([0.0, 1.5, -2.25, 0.0]));
-        assert_eq!(j["/steps/000001/contact"]["shape"], serde_json::json!([0, 6]));
+        assert_eq!(
+            j["/steps/000001/contact"]["shape"],
+            serde_json::json!([0, 6])
+        );
         assert_eq!(j["/steps/000001"]["attrs"]["time"], 0.25);
         assert_eq!(j["/"]["attrs"]["program"], "alfe \u{e9}");
         assert_eq!(j["/mesh/coordinates"]["attrs"]["units"], "");
@@ -650,25 +760,44 @@ print(json.dumps(out))
 
         let e = f.write_rows_f64("/a/x", 2, 1, 0, &[1.0, 2.0]).unwrap_err();
         assert_eq!(e.kind, crate::ErrorKind::Runtime);
-        assert!(e.message.contains("'/a/x'") && e.message.contains("H5Dcreate2"), "{e}");
+        assert!(
+            e.message.contains("'/a/x'") && e.message.contains("H5Dcreate2"),
+            "{e}"
+        );
         assert!(!e.message.contains('\n'), "{e}");
 
         let e = f.write_rows_f64("/a/y", 4, 3, 0, &[1.0, 2.0]).unwrap_err();
-        assert!(e.message.contains("'/a/y'") && e.message.contains("whole rows"), "{e}");
-        let e = f.write_rows_i64("/a/z", 2, 2, 1, &[1, 2, 3, 4]).unwrap_err();
-        assert!(e.message.contains("'/a/z'") && e.message.contains("outside"), "{e}");
+        assert!(
+            e.message.contains("'/a/y'") && e.message.contains("whole rows"),
+            "{e}"
+        );
+        let e = f
+            .write_rows_i64("/a/z", 2, 2, 1, &[1, 2, 3, 4])
+            .unwrap_err();
+        assert!(
+            e.message.contains("'/a/z'") && e.message.contains("outside"),
+            "{e}"
+        );
         let e = f.write_rows_i32("/a/w", 2, 0, 0, &[]).unwrap_err();
         assert!(e.message.contains("n_cols is 0"), "{e}");
 
         let e = f.write_attr_f64("/nope", "t", 1.0).unwrap_err();
-        assert!(e.message.contains("'/nope'") && e.message.contains("H5Oopen"), "{e}");
+        assert!(
+            e.message.contains("'/nope'") && e.message.contains("H5Oopen"),
+            "{e}"
+        );
 
         // The file still works after errors (the HDF5 error stack was cleared).
         f.write_rows_f64("/a/ok", 1, 1, 0, &[3.0]).unwrap();
         drop(f);
 
-        let e = H5File::create(&SerialComm, &dir.join("no/such/dir/f.h5")).err().unwrap();
-        assert!(e.message.contains("no/such/dir/f.h5") && e.message.contains("H5Fcreate"), "{e}");
+        let e = H5File::create(&SerialComm, &dir.join("no/such/dir/f.h5"))
+            .err()
+            .unwrap();
+        assert!(
+            e.message.contains("no/such/dir/f.h5") && e.message.contains("H5Fcreate"),
+            "{e}"
+        );
         let _ = std::fs::remove_dir_all(&dir);
     }
 }

@@ -38,7 +38,10 @@ pub(crate) mod testutil {
         );
         assert!(out.status.success(), "python check failed:\n{stderr}");
         serde_json::from_slice(&out.stdout).unwrap_or_else(|e| {
-            panic!("python printed no JSON ({e}):\n{}", String::from_utf8_lossy(&out.stdout))
+            panic!(
+                "python printed no JSON ({e}):\n{}",
+                String::from_utf8_lossy(&out.stdout)
+            )
         })
     }
 }

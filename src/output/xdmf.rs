@@ -86,7 +86,9 @@ pub enum XdmfTopology {
     Hexahedron,
     Tetrahedron,
     /// A 1-D mixed connectivity array of `n_entries` integers.
-    Mixed { n_entries: u64 },
+    Mixed {
+        n_entries: u64,
+    },
 }
 
 /// The mesh every step shares.
@@ -144,13 +146,21 @@ fn data_item(
 }
 
 fn check_attr(mesh: &XdmfMesh, a: &XdmfAttr) -> Result<()> {
-    let bad = |why: String| Err(Error::runtime(format!("XDMF attribute '{}': {why}", a.name)));
+    let bad = |why: String| {
+        Err(Error::runtime(format!(
+            "XDMF attribute '{}': {why}",
+            a.name
+        )))
+    };
     let want_rows = match a.center {
         Center::Node => mesh.n_nodes,
         Center::Cell => mesh.n_elems,
     };
     if a.n_rows != want_rows {
-        return bad(format!("{} rows, the mesh has {want_rows} {:?}s", a.n_rows, a.center));
+        return bad(format!(
+            "{} rows, the mesh has {want_rows} {:?}s",
+            a.n_rows, a.center
+        ));
     }
     if a.n_cols != a.kind.n_cols() {
         return bad(format!("{} columns for a {}", a.n_cols, a.kind.xdmf()));
@@ -190,11 +200,18 @@ fn attribute(out: &mut String, h5: &str, a: &XdmfAttr) {
 
 /// The whole XDMF document for `steps` (pure: no I/O).
 pub fn xdmf_text(mesh: &XdmfMesh, steps: &[XdmfStep]) -> Result<String> {
-    for a in mesh.static_cell_attrs.iter().chain(steps.iter().flat_map(|s| &s.attrs)) {
+    for a in mesh
+        .static_cell_attrs
+        .iter()
+        .chain(steps.iter().flat_map(|s| &s.attrs))
+    {
         check_attr(mesh, a)?;
     }
     if let Some(s) = steps.iter().find(|s| !s.time.is_finite()) {
-        return Err(Error::runtime(format!("XDMF: step time {} is not finite", s.time)));
+        return Err(Error::runtime(format!(
+            "XDMF: step time {} is not finite",
+            s.time
+        )));
     }
     let h5 = mesh.h5_file_name.as_str();
     let (topo_type, topo_dims) = match mesh.topology {
@@ -207,19 +224,40 @@ pub fn xdmf_text(mesh: &XdmfMesh, steps: &[XdmfStep]) -> Result<String> {
     out.push_str("<!DOCTYPE Xdmf SYSTEM \"Xdmf.dtd\" []>\n");
     out.push_str("<Xdmf xmlns:xi=\"http://www.w3.org/2001/XInclude\" Version=\"3.0\">\n");
     out.push_str("  <Domain>\n");
-    out.push_str("    <Grid Name=\"TimeSeries\" GridType=\"Collection\" CollectionType=\"Temporal\">\n");
+    out.push_str(
+        "    <Grid Name=\"TimeSeries\" GridType=\"Collection\" CollectionType=\"Temporal\">\n",
+    );
     for (i, s) in steps.iter().enumerate() {
-        let _ = writeln!(out, "      <Grid Name=\"step_{i:06}\" GridType=\"Uniform\">");
+        let _ = writeln!(
+            out,
+            "      <Grid Name=\"step_{i:06}\" GridType=\"Uniform\">"
+        );
         let _ = writeln!(out, "        <Time Value=\"{:?}\"/>", s.time);
         out.push_str("        <Geometry GeometryType=\"XYZ\">\n");
-        data_item(&mut out, "          ", h5, COORDINATES, &dims(mesh.n_nodes, 3), "Float", 8);
+        data_item(
+            &mut out,
+            "          ",
+            h5,
+            COORDINATES,
+            &dims(mesh.n_nodes, 3),
+            "Float",
+            8,
+        );
         out.push_str("        </Geometry>\n");
         let _ = writeln!(
             out,
             "        <Topology TopologyType=\"{topo_type}\" NumberOfElements=\"{}\">",
             mesh.n_elems
         );
-        data_item(&mut out, "          ", h5, CONNECTIVITY, &topo_dims, "Int", 8);
+        data_item(
+            &mut out,
+            "          ",
+            h5,
+            CONNECTIVITY,
+            &topo_dims,
+            "Int",
+            8,
+        );
         out.push_str("        </Topology>\n");
         for a in &mesh.static_cell_attrs {
             attribute(&mut out, h5, a);
@@ -312,22 +350,46 @@ print(json.dumps(out))
         let h5 = dir.join("run.h5");
         let (n_nodes, n_elems) = (12u64, 2u64);
         let f = H5File::create(&SerialComm, &h5).unwrap();
-        f.write_rows_f64(COORDINATES, n_nodes, 3, 0, &vec![0.0; 36]).unwrap();
-        f.write_rows_i64(CONNECTIVITY, n_elems, 8, 0, &[0; 16]).unwrap();
-        f.write_rows_i32("/mesh/partition", n_elems, 1, 0, &[0, 1]).unwrap();
+        f.write_rows_f64(COORDINATES, n_nodes, 3, 0, &vec![0.0; 36])
+            .unwrap();
+        f.write_rows_i64(CONNECTIVITY, n_elems, 8, 0, &[0; 16])
+            .unwrap();
+        f.write_rows_i32("/mesh/partition", n_elems, 1, 0, &[0, 1])
+            .unwrap();
         let mut steps = Vec::new();
         for (k, t) in [0.5, 1.0e-7].into_iter().enumerate() {
             let g = format!("/steps/{k:06}");
-            f.write_rows_f64(&format!("{g}/displacement"), n_nodes, 3, 0, &[1.0; 36]).unwrap();
-            f.write_rows_f64(&format!("{g}/stress"), n_elems, 6, 0, &[2.0; 12]).unwrap();
-            f.write_rows_f64(&format!("{g}/von_mises"), n_elems, 1, 0, &[3.0; 2]).unwrap();
+            f.write_rows_f64(&format!("{g}/displacement"), n_nodes, 3, 0, &[1.0; 36])
+                .unwrap();
+            f.write_rows_f64(&format!("{g}/stress"), n_elems, 6, 0, &[2.0; 12])
+                .unwrap();
+            f.write_rows_f64(&format!("{g}/von_mises"), n_elems, 1, 0, &[3.0; 2])
+                .unwrap();
             f.write_attr_f64(&g, "time", t).unwrap();
             steps.push(XdmfStep {
                 time: t,
                 attrs: vec![
-                    attr("displacement", Center::Node, AttrKind::Vector, &format!("{g}/displacement"), n_nodes),
-                    attr("stress", Center::Cell, AttrKind::Tensor6, &format!("{g}/stress"), n_elems),
-                    attr("von_mises", Center::Cell, AttrKind::Scalar, &format!("{g}/von_mises"), n_elems),
+                    attr(
+                        "displacement",
+                        Center::Node,
+                        AttrKind::Vector,
+                        &format!("{g}/displacement"),
+                        n_nodes,
+                    ),
+                    attr(
+                        "stress",
+                        Center::Cell,
+                        AttrKind::Tensor6,
+                        &format!("{g}/stress"),
+                        n_elems,
+                    ),
+                    attr(
+                        "von_mises",
+                        Center::Cell,
+                        AttrKind::Scalar,
+                        &format!("{g}/von_mises"),
+                        n_elems,
+                    ),
                 ],
             });
         }
@@ -340,7 +402,13 @@ print(json.dumps(out))
             static_cell_attrs: vec![XdmfAttr {
                 number_type: "Int",
                 precision: 4,
-                ..attr("partition", Center::Cell, AttrKind::Scalar, "/mesh/partition", n_elems)
+                ..attr(
+                    "partition",
+                    Center::Cell,
+                    AttrKind::Scalar,
+                    "/mesh/partition",
+                    n_elems,
+                )
             }],
         };
         let xmf = dir.join("run.xmf");
@@ -352,7 +420,10 @@ print(json.dumps(out))
         assert!(!dir.join("run.xmf.tmp").exists());
 
         let j = python_json(CHECK, &[xmf.to_str().unwrap()]);
-        assert_eq!(j["collection"], serde_json::json!(["Collection", "Temporal"]));
+        assert_eq!(
+            j["collection"],
+            serde_json::json!(["Collection", "Temporal"])
+        );
         let grids = j["grids"].as_array().unwrap();
         assert_eq!(grids.len(), 2);
         assert_eq!(grids[0]["time"], 0.5);
@@ -399,31 +470,60 @@ print(json.dumps(out))
             attrs: vec![attr("p<1>", Center::Node, AttrKind::Scalar, "/s/p", 5)],
         }];
         let t = xdmf_text(&mesh, &steps).unwrap();
-        assert!(t.contains("TopologyType=\"Tetrahedron\" NumberOfElements=\"2\""), "{t}");
+        assert!(
+            t.contains("TopologyType=\"Tetrahedron\" NumberOfElements=\"2\""),
+            "{t}"
+        );
         assert!(t.contains("Dimensions=\"2 4\""), "{t}");
-        assert!(t.contains("a&amp;b.h5:/s/p") && t.contains("Name=\"p&lt;1&gt;\""), "{t}");
+        assert!(
+            t.contains("a&amp;b.h5:/s/p") && t.contains("Name=\"p&lt;1&gt;\""),
+            "{t}"
+        );
         assert!(t.contains("<Time Value=\"2.0\"/>"), "{t}");
 
         mesh.topology = XdmfTopology::Mixed { n_entries: 14 };
         let t = xdmf_text(&mesh, &steps).unwrap();
-        assert!(t.contains("TopologyType=\"Mixed\" NumberOfElements=\"2\""), "{t}");
+        assert!(
+            t.contains("TopologyType=\"Mixed\" NumberOfElements=\"2\""),
+            "{t}"
+        );
         assert!(t.contains("Dimensions=\"14\" NumberType=\"Int\" Precision=\"8\" Format=\"HDF\">a&amp;b.h5:/mesh/connectivity"), "{t}");
 
         // No steps yet: still a valid, empty collection.
         let t = xdmf_text(&mesh, &[]).unwrap();
-        assert!(t.contains("CollectionType=\"Temporal\">\n    </Grid>"), "{t}");
+        assert!(
+            t.contains("CollectionType=\"Temporal\">\n    </Grid>"),
+            "{t}"
+        );
 
         let bad_rows = vec![XdmfStep {
             time: 0.0,
             attrs: vec![attr("u", Center::Node, AttrKind::Vector, "/s/u", 2)],
         }];
         let e = xdmf_text(&mesh, &bad_rows).unwrap_err();
-        assert!(e.message.contains("'u'") && e.message.contains("2 rows"), "{e}");
+        assert!(
+            e.message.contains("'u'") && e.message.contains("2 rows"),
+            "{e}"
+        );
         let mut bad_cols = attr("s", Center::Cell, AttrKind::Tensor6, "/s/s", 2);
         bad_cols.n_cols = 9;
-        let e = xdmf_text(&mesh, &[XdmfStep { time: 0.0, attrs: vec![bad_cols] }]).unwrap_err();
+        let e = xdmf_text(
+            &mesh,
+            &[XdmfStep {
+                time: 0.0,
+                attrs: vec![bad_cols],
+            }],
+        )
+        .unwrap_err();
         assert!(e.message.contains("9 columns"), "{e}");
-        let e = xdmf_text(&mesh, &[XdmfStep { time: f64::NAN, attrs: vec![] }]).unwrap_err();
+        let e = xdmf_text(
+            &mesh,
+            &[XdmfStep {
+                time: f64::NAN,
+                attrs: vec![],
+            }],
+        )
+        .unwrap_err();
         assert!(e.message.contains("not finite"), "{e}");
     }
 }
