@@ -11,6 +11,7 @@ pub mod error;
 pub mod fem;
 pub mod material;
 pub mod mesh;
+pub mod output;
 pub mod parallel;
 pub mod solve;
 
