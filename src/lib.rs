@@ -7,12 +7,17 @@
 //! stepping), [`model`] (the distributed FE problem: assembly, constraints, loads),
 //! [`scene`] (decks), [`output`] (HDF5/XDMF, CSV, JSON), [`app`] (what `alfe run` does).
 
+pub mod app;
+pub mod bench;
 pub mod error;
 pub mod fem;
 pub mod material;
 pub mod mesh;
+pub mod model;
 pub mod output;
 pub mod parallel;
+pub mod partition;
+pub mod scene;
 pub mod solve;
 
 pub use error::{Error, ErrorKind, Result};

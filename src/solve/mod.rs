@@ -1,4 +1,6 @@
-//! Solvers: distributed linear algebra ([`linear`]) and, on top, nonlinear solvers and
-//! load stepping.
+//! Solvers: distributed linear algebra ([`linear`]), nonlinear solvers ([`nonlinear`])
+//! and load stepping ([`stepping`]).
 
 pub mod linear;
+pub mod nonlinear;
+pub mod stepping;

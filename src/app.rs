@@ -1,0 +1,316 @@
+//! What the commands do: `run`, `check`, `partition`. The CLI (`main.rs`) only parses
+//! arguments and maps errors to exit codes; tests call these functions directly.
+
+use crate::model::def::ModelDef;
+use crate::model::Model;
+use crate::output::results::ResultsWriter;
+use crate::parallel::Comm;
+use crate::partition::{cache, distribute, quality};
+use crate::scene::deck::PreconditionerKind;
+use crate::solve::linear::gmres::GmresOptions;
+use crate::solve::nonlinear::newton::NewtonOptions;
+use crate::solve::stepping::{run_static, RunTotals};
+use crate::{Error, ErrorKind, Result};
+use std::path::PathBuf;
+use std::time::Instant;
+
+#[derive(Debug, Clone)]
+pub struct RunOptions {
+    /// Built-in scene name or deck path.
+    pub target: String,
+    /// Output directory; default `out/<scene>`.
+    pub out: Option<PathBuf>,
+    /// Partition cache directory.
+    pub partitions: PathBuf,
+    /// Recompute and overwrite a cached partition.
+    pub repartition: bool,
+    /// No progress lines.
+    pub quiet: bool,
+}
+
+/// What a run leaves behind besides its files (also written to `summary.json`).
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct Summary {
+    pub scene: String,
+    pub units: String,
+    pub ranks: usize,
+    pub nodes: usize,
+    pub elements: usize,
+    pub unknowns: usize,
+    pub steps: usize,
+    pub converged: bool,
+    pub nonlinear_iterations: usize,
+    pub linear_iterations: usize,
+    pub residual_evaluations: usize,
+    pub factorizations: usize,
+    pub retries: usize,
+    pub wall_time_s: f64,
+    /// Wall time by phase (max over ranks): setup, partition, assembly, linear_solve, output.
+    pub phases: Phases,
+    /// Largest peak resident set over the ranks, and every rank's.
+    pub peak_rss_mb: f64,
+    pub peak_rss_mb_per_rank: Vec<f64>,
+    /// Where the partition came from: "cache", "computed" or "trivial".
+    pub partition: String,
+    pub message: String,
+    pub output_dir: String,
+}
+
+#[derive(Debug, Clone, Default, serde::Serialize)]
+pub struct Phases {
+    pub setup: f64,
+    pub partition: f64,
+    pub assembly: f64,
+    pub linear_solve: f64,
+    pub output: f64,
+}
+
+/// Peak resident set size of this process in MB (Linux VmHWM).
+pub fn peak_rss_mb() -> f64 {
+    std::fs::read_to_string("/proc/self/status")
+        .ok()
+        .and_then(|s| s.lines().find(|l| l.starts_with("VmHWM:")).and_then(|l| l.split_whitespace().nth(1)?.parse::<f64>().ok()))
+        .map(|kb| kb / 1024.0)
+        .unwrap_or(0.0)
+}
+
+/// Run `f` on rank 0 only and let every rank know whether it failed (with the same
+/// error), so that a bad deck stops all ranks together instead of leaving them waiting.
+pub fn on_rank0<T>(comm: &dyn Comm, f: impl FnOnce() -> Result<T>) -> Result<Option<T>> {
+    let (res, mut msg) = if comm.rank() == 0 {
+        match f() {
+            Ok(v) => (Some(v), vec![0u8]),
+            Err(e) => {
+                let code = match e.kind {
+                    ErrorKind::Input => 1u8,
+                    ErrorKind::Convergence => 2,
+                    ErrorKind::Runtime => 3,
+                };
+                let mut m = vec![code];
+                m.extend_from_slice(e.message.as_bytes());
+                (None, m)
+            }
+        }
+    } else {
+        (None, Vec::new())
+    };
+    comm.broadcast_bytes(0, &mut msg);
+    if msg[0] == 0 {
+        return Ok(res);
+    }
+    let text = String::from_utf8_lossy(&msg[1..]).to_string();
+    Err(match msg[0] {
+        1 => Error::input(text),
+        2 => Error::convergence(text),
+        _ => Error::runtime(text),
+    })
+}
+
+/// Newton options from the deck's solver settings.
+pub fn newton_options(def: &crate::model::def::Settings) -> NewtonOptions {
+    let s = &def.solver;
+    NewtonOptions {
+        max_iterations: s.max_iterations,
+        residual_rtol: s.residual_rtol,
+        increment_rtol: s.increment_rtol,
+        linear: GmresOptions { rtol: s.linear.rtol, atol: 0.0, restart: s.linear.restart, max_iterations: s.linear.max_iterations },
+        block_jacobi: s.linear.preconditioner == PreconditionerKind::BlockJacobi,
+    }
+}
+
+/// Collective: read and partition on rank 0, give each rank its piece.
+pub fn setup(comm: &dyn Comm, opts: &RunOptions, phases: &mut Phases) -> Result<(Model, String)> {
+    let t0 = Instant::now();
+    let mut t_part = 0.0;
+    let pieces = on_rank0(comm, || {
+        let src = crate::scene::load(&opts.target)?;
+        let def = crate::scene::model(&src)?;
+        let tp = Instant::now();
+        let (part, origin, _) = cache::get(&opts.partitions, &def.settings.scene, &def.mesh, comm.size(), opts.repartition)?;
+        let pieces = distribute::split(&def, &part, comm.size());
+        t_part = tp.elapsed().as_secs_f64();
+        let origin = match origin {
+            cache::Origin::Cache => "cache",
+            cache::Origin::Computed => "computed",
+            cache::Origin::Trivial => "trivial",
+        };
+        Ok((pieces, origin.to_string()))
+    })?;
+    let (pieces, origin) = match pieces {
+        Some((p, o)) => (Some(p), o),
+        None => (None, String::new()),
+    };
+    let tp = Instant::now();
+    let local = distribute::scatter(comm, pieces)?;
+    let model = Model::new(comm, local)?;
+    t_part += tp.elapsed().as_secs_f64();
+    phases.partition = t_part;
+    phases.setup = t0.elapsed().as_secs_f64() - t_part;
+    Ok((model, origin))
+}
+
+/// Collective: the whole `alfe run`. Returns the summary; a run that did not converge
+/// returns `Err(Convergence)` after writing everything converged so far and the summary.
+pub fn run(comm: &dyn Comm, opts: &RunOptions) -> Result<(Summary, Vec<f64>)> {
+    let t_start = Instant::now();
+    let mut phases = Phases::default();
+    let (mut model, origin) = setup(comm, opts, &mut phases)?;
+    let scene = model.local.settings.scene.clone();
+    let out = opts.out.clone().unwrap_or_else(|| PathBuf::from("out").join(&scene));
+    let mut writer = ResultsWriter::create(comm, &out, &model)?;
+    let nopts = newton_options(&model.local.settings);
+    let every = model.local.settings.output.every;
+    let n_steps = crate::solve::stepping::step_times(model.local.settings.analysis.end_time, model.local.settings.analysis.step).len();
+    let quiet = opts.quiet || comm.rank() != 0;
+    if !quiet {
+        println!(
+            "alfe: scene {scene} on {} rank(s): {} nodes, {} elements, {} unknowns, {} steps",
+            comm.size(),
+            model.local.n_nodes_global,
+            model.local.n_elems_global,
+            3 * model.local.n_nodes_global,
+            n_steps
+        );
+    }
+    let mut u = Vec::new();
+    let set_names = model.local.reaction_sets.clone();
+    let totals: RunTotals = run_static(comm, &mut model, &mut u, &nopts, &mut |rec, u, m| {
+        let fields = rec.step % every == 0 || rec.step == n_steps;
+        writer.step(comm, rec, u, m, fields)?;
+        if !quiet {
+            let reac = set_names
+                .iter()
+                .zip(&rec.reactions)
+                .map(|(n, f)| format!(" {n}=({:.4e}, {:.4e}, {:.4e})", f[0], f[1], f[2]))
+                .collect::<String>();
+            println!(
+                "step {:>4}/{n_steps}  t={:<10.4e} newton {:>2}  gmres {:>4}  |r|/f={:.2e}  {:.2}s{reac}",
+                rec.step,
+                rec.time,
+                rec.stats.iterations,
+                rec.stats.linear_iterations,
+                rec.stats.residual_history.last().copied().unwrap_or(0.0),
+                rec.wall_seconds
+            );
+        }
+        Ok(())
+    })?;
+    phases.assembly = totals.seconds_assembly;
+    phases.linear_solve = totals.seconds_linear;
+    phases.output = writer.seconds;
+    let mut ph = [phases.setup, phases.partition, phases.assembly, phases.linear_solve, phases.output];
+    comm.allreduce_max(&mut ph);
+    let rss = comm.allgather_f64(peak_rss_mb());
+    let message = totals.failure.clone().unwrap_or_else(|| "converged".into());
+    let summary = Summary {
+        scene: scene.clone(),
+        units: model.local.settings.units.describe().into(),
+        ranks: comm.size(),
+        nodes: model.local.n_nodes_global,
+        elements: model.local.n_elems_global,
+        unknowns: 3 * model.local.n_nodes_global,
+        steps: totals.steps,
+        converged: totals.converged,
+        nonlinear_iterations: totals.nonlinear_iterations,
+        linear_iterations: totals.linear_iterations,
+        residual_evaluations: totals.residual_evaluations,
+        factorizations: totals.factorizations,
+        retries: totals.retries,
+        wall_time_s: t_start.elapsed().as_secs_f64(),
+        phases: Phases { setup: ph[0], partition: ph[1], assembly: ph[2], linear_solve: ph[3], output: ph[4] },
+        peak_rss_mb: rss.iter().cloned().fold(0.0, f64::max),
+        peak_rss_mb_per_rank: rss,
+        partition: origin,
+        message: message.clone(),
+        output_dir: out.display().to_string(),
+    };
+    drop(writer);
+    let r = if comm.rank() == 0 {
+        serde_json::to_string_pretty(&summary)
+            .map_err(|e| Error::runtime(e.to_string()))
+            .and_then(|s| std::fs::write(out.join("summary.json"), s + "\n").map_err(|e| Error::runtime(format!("cannot write summary.json: {e}"))))
+    } else {
+        Ok(())
+    };
+    if !comm.all_ok(r.is_ok()) {
+        return Err(r.err().unwrap_or_else(|| Error::runtime("writing summary.json failed on rank 0")));
+    }
+    if let Some(f) = totals.failure {
+        return Err(Error::convergence(format!("{f}; {} converged step(s) written to {}", totals.steps, out.display())));
+    }
+    Ok((summary, u))
+}
+
+/// `alfe check`: validate and report the model size and partition quality (serial).
+pub fn check(target: &str, ranks: usize) -> Result<String> {
+    let src = crate::scene::load(target)?;
+    let def = crate::scene::model(&src)?;
+    let mut s = describe(&def);
+    if ranks > 1 {
+        let part = crate::partition::partition_elements(&def.mesh, ranks)?;
+        s.push_str(&describe_partition(&def, &part, ranks)?);
+    }
+    Ok(s)
+}
+
+fn describe(def: &ModelDef) -> String {
+    let m = &def.mesh;
+    let mut kinds = std::collections::BTreeMap::new();
+    for k in &m.kinds {
+        *kinds.entry(k.name()).or_insert(0usize) += 1;
+    }
+    let kinds: Vec<String> = kinds.iter().map(|(k, n)| format!("{n} {k}")).collect();
+    let n_con: usize = def.constraints.len();
+    let mut s = format!(
+        "scene {}: valid\n  units: {}\n  parts: {}\n  nodes: {}\n  elements: {} ({})\n  unknowns: {} (3 per node)\n  constraints: {}, loads: {}\n  node sets: {}\n  surfaces: {}\n  steps: {}\n",
+        def.settings.scene,
+        def.settings.units.describe(),
+        def.part_names.join(", "),
+        m.n_nodes(),
+        m.n_elems(),
+        kinds.join(", "),
+        3 * m.n_nodes(),
+        n_con,
+        def.loads.len(),
+        def.node_sets.iter().map(|(k, v)| format!("{k} ({} nodes)", v.len())).collect::<Vec<_>>().join(", "),
+        def.surfaces.iter().map(|(k, v)| format!("{k} ({} faces)", v.len())).collect::<Vec<_>>().join(", "),
+        crate::solve::stepping::step_times(def.settings.analysis.end_time, def.settings.analysis.step).len(),
+    );
+    s.push_str("");
+    s
+}
+
+fn describe_partition(def: &ModelDef, part: &[u32], ranks: usize) -> Result<String> {
+    let q = quality(&def.mesh, part, ranks)?;
+    let owner = crate::partition::node_owner(&def.mesh, part);
+    let mut s = format!("partition over {ranks} ranks (METIS k-way on the element dual graph, seed 0):\n  edge cut: {} faces\n  imbalance: {:.3} (max/mean elements)\n", q.edge_cut, q.imbalance);
+    for r in 0..ranks {
+        s.push_str(&format!(
+            "  rank {r}: {} elements, {} owned nodes ({} unknowns), {} ghost nodes\n",
+            q.elements_per_rank[r],
+            q.owned_nodes_per_rank[r],
+            3 * q.owned_nodes_per_rank[r],
+            q.ghost_nodes_per_rank[r]
+        ));
+    }
+    for (name, nodes) in &def.node_sets {
+        let mut rs: Vec<u32> = nodes.iter().map(|&n| owner[n]).collect();
+        rs.sort_unstable();
+        rs.dedup();
+        s.push_str(&format!("  set {name} owned by rank(s) {}\n", rs.iter().map(|r| r.to_string()).collect::<Vec<_>>().join(",")));
+    }
+    Ok(s)
+}
+
+/// `alfe partition`: compute the METIS partition and write it to the cache directory.
+pub fn partition(target: &str, ranks: usize, dir: &std::path::Path) -> Result<String> {
+    if ranks < 2 {
+        return Err(Error::input("--ranks: expected 2 or more (one rank needs no partition)"));
+    }
+    let src = crate::scene::load(target)?;
+    let def = crate::scene::model(&src)?;
+    let part = crate::partition::partition_elements(&def.mesh, ranks)?;
+    let file = cache::path(dir, &def.settings.scene, ranks);
+    cache::write(&file, &def.mesh, ranks, &part)?;
+    Ok(format!("wrote {}\n{}", file.display(), describe_partition(&def, &part, ranks)?))
+}

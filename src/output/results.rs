@@ -1,0 +1,206 @@
+//! The run's results, a stable interface for scripts (README "Outputs"):
+//! `DIR/<scene>.h5` (mesh once, then `/steps/NNNNNN/{displacement,stress,von_mises}`,
+//! written collectively, each rank its own rows), `DIR/<scene>.xmf` (XDMF3 for
+//! ParaView, rewritten after each step so an interrupted run stays readable),
+//! `DIR/history.csv` (one row per converged step) and `DIR/summary.json`.
+
+use super::h5::H5File;
+use super::xdmf::{write_xdmf, AttrKind, Center, XdmfAttr, XdmfMesh, XdmfStep, XdmfTopology};
+use crate::fem::element::von_mises;
+use crate::mesh::ElemKind;
+use crate::model::Model;
+use crate::parallel::Comm;
+use crate::solve::stepping::StepRecord;
+use crate::{Error, Result};
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+pub struct ResultsWriter {
+    h5: H5File,
+    xmf_path: PathBuf,
+    xmesh: XdmfMesh,
+    steps: Vec<XdmfStep>,
+    history: Option<std::fs::File>,
+    n_nodes: u64,
+    n_elems: u64,
+    node_start: u64,
+    elem_start: u64,
+    pub seconds: f64,
+    pub bytes_written: u64,
+}
+
+/// Every rank learns whether a rank-0-only action succeeded, so none is left waiting.
+fn agree(comm: &dyn Comm, r: Result<()>) -> Result<()> {
+    let ok = comm.all_ok(r.is_ok());
+    match (r, ok) {
+        (Err(e), _) => Err(e),
+        (Ok(()), false) => Err(Error::runtime("writing results failed on rank 0")),
+        (Ok(()), true) => Ok(()),
+    }
+}
+
+impl ResultsWriter {
+    /// Collective: create the files and write the mesh.
+    pub fn create(comm: &dyn Comm, dir: &Path, model: &Model) -> Result<Self> {
+        let t0 = std::time::Instant::now();
+        let l = &model.local;
+        let scene = l.settings.scene.clone();
+        let r = if comm.rank() == 0 {
+            std::fs::create_dir_all(dir).map_err(|e| Error::runtime(format!("cannot create output directory `{}`: {e}", dir.display())))
+        } else {
+            Ok(())
+        };
+        agree(comm, r)?;
+        let h5_name = format!("{scene}.h5");
+        let h5 = H5File::create(comm, &dir.join(&h5_name))?;
+        let n_nodes = l.n_nodes_global as u64;
+        let n_elems = l.n_elems_global as u64;
+        let node_start = l.node_start() as u64;
+        let elem_start = l.elem_start() as u64;
+        let no = l.n_owned();
+        let mut bytes = 0u64;
+        h5.write_attr_str("/", "scene", &scene)?;
+        h5.write_attr_str("/", "units", l.settings.units.describe())?;
+        h5.write_attr_str("/", "alfe_version", env!("CARGO_PKG_VERSION"))?;
+        h5.create_group("/mesh")?;
+        let coords: Vec<f64> = l.coords[..no].iter().flatten().copied().collect();
+        h5.write_rows_f64("/mesh/coordinates", n_nodes, 3, node_start, &coords)?;
+        bytes += 8 * coords.len() as u64;
+        let orig_n: Vec<i64> = l.orig_node.iter().map(|&n| n as i64).collect();
+        h5.write_rows_i64("/mesh/original_node_id", n_nodes, 1, node_start, &orig_n)?;
+        // Connectivity in global (rank-contiguous) node numbers.
+        let mut kinds = [0.0, 0.0];
+        for k in &l.kinds {
+            kinds[(*k == ElemKind::Tet4) as usize] = 1.0;
+        }
+        comm.allreduce_max(&mut kinds);
+        let topology = if kinds[0] > 0.0 && kinds[1] > 0.0 {
+            // XDMF mixed: [type, nodes...] per element; offsets by exclusive scan.
+            let mut mixed = Vec::new();
+            for e in 0..l.n_elems() {
+                mixed.push(match l.kinds[e] {
+                    ElemKind::Hex8 => 9,
+                    ElemKind::Tet4 => 6,
+                });
+                mixed.extend(l.elem_nodes(e).iter().map(|&n| l.global_node(n) as i64));
+            }
+            let (before, total) = comm.exclusive_scan(mixed.len() as u64);
+            h5.write_rows_i64("/mesh/connectivity", total, 1, before, &mixed)?;
+            XdmfTopology::Mixed { n_entries: total }
+        } else {
+            let npe = if kinds[1] > 0.0 { 4 } else { 8 };
+            let conn: Vec<i64> = (0..l.n_elems()).flat_map(|e| l.elem_nodes(e).iter().map(|&n| l.global_node(n) as i64).collect::<Vec<_>>()).collect();
+            h5.write_rows_i64("/mesh/connectivity", n_elems, npe, elem_start, &conn)?;
+            if npe == 4 {
+                XdmfTopology::Tetrahedron
+            } else {
+                XdmfTopology::Hexahedron
+            }
+        };
+        let part: Vec<i32> = vec![comm.rank() as i32; l.n_elems()];
+        h5.write_rows_i32("/mesh/partition", n_elems, 1, elem_start, &part)?;
+        let mat: Vec<i32> = l.elem_material.iter().map(|&m| m as i32).collect();
+        h5.write_rows_i32("/mesh/material", n_elems, 1, elem_start, &mat)?;
+        let orig_e: Vec<i64> = l.orig_elem.iter().map(|&e| e as i64).collect();
+        h5.write_rows_i64("/mesh/original_element_id", n_elems, 1, elem_start, &orig_e)?;
+        h5.create_group("/steps")?;
+        h5.flush()?;
+        let cell_i32 = |name: &str, path: &str| XdmfAttr {
+            name: name.into(),
+            center: Center::Cell,
+            kind: AttrKind::Scalar,
+            h5_path: path.into(),
+            n_rows: n_elems,
+            n_cols: 1,
+            number_type: "Int",
+            precision: 4,
+        };
+        let xmesh = XdmfMesh {
+            h5_file_name: h5_name,
+            n_nodes,
+            n_elems,
+            topology,
+            static_cell_attrs: vec![cell_i32("partition", "/mesh/partition"), cell_i32("material", "/mesh/material")],
+        };
+        let xmf_path = dir.join(format!("{scene}.xmf"));
+        let mut history = None;
+        let r = if comm.rank() == 0 {
+            (|| -> Result<()> {
+                write_xdmf(&xmf_path, &xmesh, &[])?;
+                let mut f = std::fs::File::create(dir.join("history.csv"))?;
+                let mut head = String::from("step,time,nonlinear_iterations,linear_iterations,retries,wall_time_s");
+                for s in &l.reaction_sets {
+                    head.push_str(&format!(",{s}.fx,{s}.fy,{s}.fz"));
+                }
+                head.push_str(",residual_evaluations,factorizations,final_relative_residual");
+                writeln!(f, "{head}")?;
+                history = Some(f);
+                Ok(())
+            })()
+        } else {
+            Ok(())
+        };
+        agree(comm, r)?;
+        let mut w = Self { h5, xmf_path, xmesh, steps: Vec::new(), history, n_nodes, n_elems, node_start, elem_start, seconds: 0.0, bytes_written: 0 };
+        w.bytes_written = bytes;
+        w.seconds = t0.elapsed().as_secs_f64();
+        Ok(w)
+    }
+
+    /// Collective: the history row of a converged step (always) and, if `fields`, its
+    /// displacement and stress fields.
+    pub fn step(&mut self, comm: &dyn Comm, rec: &StepRecord, u: &[f64], model: &Model, fields: bool) -> Result<()> {
+        let t0 = std::time::Instant::now();
+        let r = if let Some(f) = self.history.as_mut() {
+            let s = &rec.stats;
+            let mut row = format!("{},{},{},{},{},{:.6}", rec.step, rec.time, s.iterations, s.linear_iterations, rec.retries, rec.wall_seconds);
+            for f3 in &rec.reactions {
+                row.push_str(&format!(",{:.12e},{:.12e},{:.12e}", f3[0], f3[1], f3[2]));
+            }
+            row.push_str(&format!(",{},{},{:.3e}", s.residual_evaluations, s.factorizations, s.residual_history.last().copied().unwrap_or(0.0)));
+            writeln!(f, "{row}").and_then(|_| f.flush()).map_err(Error::from)
+        } else {
+            Ok(())
+        };
+        agree(comm, r)?;
+        if fields {
+            let g = format!("/steps/{:06}", rec.step);
+            self.h5.create_group(&g)?;
+            self.h5.write_attr_f64(&g, "time", rec.time)?;
+            self.h5.write_rows_f64(&format!("{g}/displacement"), self.n_nodes, 3, self.node_start, u)?;
+            let sig = model.stresses(comm, u)?;
+            let flat: Vec<f64> = sig.iter().flatten().copied().collect();
+            self.h5.write_rows_f64(&format!("{g}/stress"), self.n_elems, 6, self.elem_start, &flat)?;
+            let vm: Vec<f64> = sig.iter().map(von_mises).collect();
+            self.h5.write_rows_f64(&format!("{g}/von_mises"), self.n_elems, 1, self.elem_start, &vm)?;
+            self.h5.flush()?;
+            self.bytes_written += 8 * (u.len() + flat.len() + vm.len()) as u64;
+            let attr = |name: &str, center: Center, kind: AttrKind, n_rows: u64, n_cols: u64| XdmfAttr {
+                name: name.into(),
+                center,
+                kind,
+                h5_path: format!("{g}/{name}"),
+                n_rows,
+                n_cols,
+                number_type: "Float",
+                precision: 8,
+            };
+            self.steps.push(XdmfStep {
+                time: rec.time,
+                attrs: vec![
+                    attr("displacement", Center::Node, AttrKind::Vector, self.n_nodes, 3),
+                    attr("stress", Center::Cell, AttrKind::Tensor6, self.n_elems, 6),
+                    attr("von_mises", Center::Cell, AttrKind::Scalar, self.n_elems, 1),
+                ],
+            });
+            let r = if comm.rank() == 0 { write_xdmf(&self.xmf_path, &self.xmesh, &self.steps) } else { Ok(()) };
+            agree(comm, r)?;
+        }
+        self.seconds += t0.elapsed().as_secs_f64();
+        Ok(())
+    }
+
+    pub fn n_field_steps(&self) -> usize {
+        self.steps.len()
+    }
+}

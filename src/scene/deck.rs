@@ -1,0 +1,450 @@
+//! The scene deck: TOML, parsed with serde. Unknown keys are errors
+//! (`deny_unknown_fields` everywhere) and every error names its field path, e.g.
+//! `parts[0].mesh.cells: invalid length 2, expected an array of length 3`.
+
+use serde::{Deserialize, Serialize};
+
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct Deck {
+    pub scene: SceneInfo,
+    #[serde(default)]
+    pub materials: Vec<MaterialDeck>,
+    pub parts: Vec<PartDeck>,
+    #[serde(default)]
+    pub node_sets: Vec<NodeSetDeck>,
+    #[serde(default)]
+    pub surfaces: Vec<SurfaceDeck>,
+    #[serde(default)]
+    pub curves: Vec<CurveDeck>,
+    #[serde(default)]
+    pub boundary: Vec<BoundaryDeck>,
+    #[serde(default)]
+    pub loads: Vec<LoadDeck>,
+    pub analysis: AnalysisDeck,
+    #[serde(default)]
+    pub solver: SolverDeck,
+    #[serde(default)]
+    pub output: OutputDeck,
+}
+
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct SceneInfo {
+    pub name: String,
+    #[serde(default)]
+    pub description: String,
+    /// The consistent unit system every number in the deck is in.
+    pub units: Units,
+}
+
+/// Consistent unit systems (length, mass, time → force, stress, density).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize)]
+pub enum Units {
+    /// m, kg, s → N, Pa, kg/m³
+    #[serde(rename = "m-kg-s")]
+    MKgS,
+    /// mm, tonne, s → N, MPa, t/mm³ (steel: 7.85e-9)
+    #[serde(rename = "mm-t-s")]
+    MmTS,
+    /// mm, kg, ms → kN, GPa, kg/mm³ (steel: 7.85e-6)
+    #[serde(rename = "mm-kg-ms")]
+    MmKgMs,
+    /// mm, g, ms → N, MPa, g/mm³ (steel: 7.85e-3)
+    #[serde(rename = "mm-g-ms")]
+    MmGMs,
+}
+
+impl Units {
+    pub fn describe(self) -> &'static str {
+        match self {
+            Units::MKgS => "length m, mass kg, time s, force N, stress Pa",
+            Units::MmTS => "length mm, mass t, time s, force N, stress MPa",
+            Units::MmKgMs => "length mm, mass kg, time ms, force kN, stress GPa",
+            Units::MmGMs => "length mm, mass g, time ms, force N, stress MPa",
+        }
+    }
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum MaterialModel {
+    /// Small-strain isotropic Hooke's law.
+    LinearElastic,
+    /// Compressible neo-Hookean (Bonet & Wood eq. 6.28), finite strain.
+    NeoHookean,
+}
+
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct MaterialDeck {
+    pub name: String,
+    pub model: MaterialModel,
+    /// Young's modulus (stress units).
+    #[serde(rename = "E")]
+    pub e: f64,
+    /// Poisson's ratio.
+    pub nu: f64,
+    /// Mass density (mass / length³); only dynamics needs it.
+    #[serde(default)]
+    pub density: f64,
+}
+
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct PartDeck {
+    pub name: String,
+    pub material: String,
+    pub mesh: MeshDeck,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum ElementDeck {
+    #[default]
+    Hex8,
+    Tet4,
+}
+
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(tag = "kind", rename_all = "lowercase", deny_unknown_fields)]
+pub enum MeshDeck {
+    /// A generated block; its six sides are groups `xmin`, `xmax`, `ymin`, ... .
+    Box {
+        #[serde(default)]
+        origin: [f64; 3],
+        size: [f64; 3],
+        cells: [usize; 3],
+        /// Per axis: last cell size / first cell size (geometric); 1 = uniform.
+        #[serde(default = "ones")]
+        grading: [f64; 3],
+        #[serde(default)]
+        element: ElementDeck,
+        /// Move interior nodes by up to this fraction of the local edge (patch tests).
+        #[serde(default)]
+        distort: f64,
+    },
+    /// A Gmsh MSH 4.1 ASCII file (hex8, tet4; physical groups become groups). A
+    /// relative path is taken from the deck's directory.
+    Gmsh { file: String },
+}
+
+fn ones() -> [f64; 3] {
+    [1.0; 3]
+}
+
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct BoxSel {
+    pub min: [f64; 3],
+    pub max: [f64; 3],
+}
+
+/// A node set: exactly one of `box`, `group`, `nodes`; `part` restricts it to a part.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct NodeSetDeck {
+    pub name: String,
+    #[serde(default)]
+    pub part: Option<String>,
+    #[serde(default, rename = "box")]
+    pub bbox: Option<BoxSel>,
+    /// A mesh group: a box side (`xmin`, ...) or a Gmsh physical group name.
+    #[serde(default)]
+    pub group: Option<String>,
+    /// Node numbers (0-based, in the order of the part meshes).
+    #[serde(default)]
+    pub nodes: Option<Vec<usize>>,
+}
+
+/// A surface (boundary faces): exactly one of `box`, `group`; `part` restricts it.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct SurfaceDeck {
+    pub name: String,
+    #[serde(default)]
+    pub part: Option<String>,
+    #[serde(default, rename = "box")]
+    pub bbox: Option<BoxSel>,
+    #[serde(default)]
+    pub group: Option<String>,
+}
+
+/// A piecewise-linear time curve, constant beyond its ends.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct CurveDeck {
+    pub name: String,
+    /// [[t0, v0], [t1, v1], ...] with strictly increasing t.
+    pub points: Vec<[f64; 2]>,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Comp {
+    X,
+    Y,
+    Z,
+}
+
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(tag = "type", rename_all = "lowercase", deny_unknown_fields)]
+pub enum BoundaryDeck {
+    /// Zero displacement on the listed components (default all three).
+    Fixed {
+        set: String,
+        #[serde(default = "all_comps")]
+        components: Vec<Comp>,
+    },
+    /// Prescribed displacement `value × curve(t)` on the listed components.
+    Displacement {
+        set: String,
+        components: Vec<Comp>,
+        value: f64,
+        /// Default: a ramp from 0 at t = 0 to 1 at the end time.
+        #[serde(default)]
+        curve: Option<String>,
+    },
+}
+
+fn all_comps() -> Vec<Comp> {
+    vec![Comp::X, Comp::Y, Comp::Z]
+}
+
+impl BoundaryDeck {
+    pub fn set(&self) -> &str {
+        match self {
+            BoundaryDeck::Fixed { set, .. } | BoundaryDeck::Displacement { set, .. } => set,
+        }
+    }
+}
+
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(tag = "type", rename_all = "lowercase", deny_unknown_fields)]
+pub enum LoadDeck {
+    /// The same force on every node of a set: `force × curve(t)` per node.
+    Nodal {
+        set: String,
+        force: [f64; 3],
+        #[serde(default)]
+        curve: Option<String>,
+    },
+    /// A dead traction (force per reference area) on a surface.
+    Traction {
+        surface: String,
+        traction: [f64; 3],
+        #[serde(default)]
+        curve: Option<String>,
+    },
+    /// A follower pressure (positive pushes into the body) on a surface.
+    Pressure {
+        surface: String,
+        pressure: f64,
+        #[serde(default)]
+        curve: Option<String>,
+    },
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum AnalysisKind {
+    Static,
+}
+
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct AnalysisDeck {
+    #[serde(rename = "type")]
+    pub kind: AnalysisKind,
+    /// Pseudo-time at the end of the load path.
+    pub end_time: f64,
+    /// Pseudo-time step.
+    pub step: f64,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum NonlinearKind {
+    #[default]
+    Newton,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize, Default)]
+#[serde(rename_all = "kebab-case")]
+pub enum PreconditionerKind {
+    #[default]
+    BlockJacobi,
+    None,
+}
+
+/// Nonlinear solver settings. Convergence (both must hold): ‖r‖ ≤ residual_rtol · f_ref
+/// with f_ref = max(‖f_ext‖, ‖f_int‖) over all unknowns (so reactions count), and the
+/// last correction ‖Δu‖ ≤ increment_rtol · ‖u‖.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct SolverDeck {
+    #[serde(default)]
+    pub nonlinear: NonlinearKind,
+    #[serde(default = "d_max_it")]
+    pub max_iterations: usize,
+    #[serde(default = "d_rrtol")]
+    pub residual_rtol: f64,
+    #[serde(default = "d_urtol")]
+    pub increment_rtol: f64,
+    #[serde(default)]
+    pub linear: LinearDeck,
+}
+
+fn d_max_it() -> usize {
+    25
+}
+fn d_rrtol() -> f64 {
+    1e-8
+}
+fn d_urtol() -> f64 {
+    1e-6
+}
+
+impl Default for SolverDeck {
+    fn default() -> Self {
+        Self {
+            nonlinear: NonlinearKind::Newton,
+            max_iterations: d_max_it(),
+            residual_rtol: d_rrtol(),
+            increment_rtol: d_urtol(),
+            linear: LinearDeck::default(),
+        }
+    }
+}
+
+/// GMRES settings (right-preconditioned, so `rtol` bounds the true residual).
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct LinearDeck {
+    #[serde(default = "d_lrtol")]
+    pub rtol: f64,
+    #[serde(default = "d_restart")]
+    pub restart: usize,
+    #[serde(default = "d_lmax")]
+    pub max_iterations: usize,
+    #[serde(default)]
+    pub preconditioner: PreconditionerKind,
+}
+
+fn d_lrtol() -> f64 {
+    1e-10
+}
+fn d_restart() -> usize {
+    60
+}
+fn d_lmax() -> usize {
+    2000
+}
+
+impl Default for LinearDeck {
+    fn default() -> Self {
+        Self {
+            rtol: d_lrtol(),
+            restart: d_restart(),
+            max_iterations: d_lmax(),
+            preconditioner: PreconditionerKind::BlockJacobi,
+        }
+    }
+}
+
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct OutputDeck {
+    /// Write fields every n-th converged step (the last step is always written).
+    #[serde(default = "one")]
+    pub every: usize,
+    /// Node sets whose reaction forces go to the history; default: every constrained set.
+    #[serde(default)]
+    pub reactions: Option<Vec<String>>,
+}
+
+fn one() -> usize {
+    1
+}
+
+impl Default for OutputDeck {
+    fn default() -> Self {
+        Self { every: 1, reactions: None }
+    }
+}
+
+/// Parse a deck, naming the field path and line of the first error.
+pub fn parse(text: &str) -> Result<Deck, String> {
+    let de = toml::Deserializer::new(text);
+    serde_path_to_error::deserialize(de).map_err(|e| {
+        let path = e.path().to_string();
+        let inner = e.into_inner();
+        let line = inner.span().map(|s| text[..s.start.min(text.len())].lines().count().max(1));
+        let msg = inner.message().trim().replace('\n', " ");
+        let at = line.map(|l| format!(" (line {l})")).unwrap_or_default();
+        if path.is_empty() || path == "." {
+            format!("{msg}{at}")
+        } else {
+            format!("{path}: {msg}{at}")
+        }
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const MIN: &str = r#"
+[scene]
+name = "t"
+units = "mm-t-s"
+[[materials]]
+name = "m"
+model = "neo-hookean"
+E = 1.0
+nu = 0.3
+[[parts]]
+name = "p"
+material = "m"
+mesh = { kind = "box", size = [1, 1, 1], cells = [1, 1, 1] }
+[analysis]
+type = "static"
+end_time = 1.0
+step = 0.5
+"#;
+
+    #[test]
+    fn minimal_deck_parses_with_defaults() {
+        let d = parse(MIN).unwrap();
+        assert_eq!(d.solver.max_iterations, 25);
+        assert_eq!(d.output.every, 1);
+        match &d.parts[0].mesh {
+            MeshDeck::Box { grading, element, .. } => {
+                assert_eq!(*grading, [1.0; 3]);
+                assert_eq!(*element, ElementDeck::Hex8);
+            }
+            _ => panic!("expected a box"),
+        }
+    }
+
+    #[test]
+    fn unknown_key_names_its_path() {
+        let bad = MIN.replace("nu = 0.3", "nu = 0.3\nyoungs = 3");
+        let e = parse(&bad).unwrap_err();
+        assert!(e.contains("materials[0]") && e.contains("youngs"), "{e}");
+    }
+
+    #[test]
+    fn missing_field_is_reported() {
+        let bad = MIN.replace("step = 0.5\n", "");
+        let e = parse(&bad).unwrap_err();
+        assert!(e.contains("analysis") && e.contains("step"), "{e}");
+    }
+
+    #[test]
+    fn unknown_key_in_tagged_mesh_is_an_error() {
+        let bad = MIN.replace("cells = [1, 1, 1]", "cells = [1, 1, 1], celz = 2");
+        let e = parse(&bad).unwrap_err();
+        assert!(e.contains("celz"), "{e}");
+    }
+}

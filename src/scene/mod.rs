@@ -1,0 +1,81 @@
+//! Scenes: decks (TOML), the built-in ones embedded in the binary, and the builder that
+//! turns a deck into a validated [`crate::model::def::ModelDef`].
+
+pub mod build;
+pub mod deck;
+
+use crate::{Error, Result};
+use std::path::{Path, PathBuf};
+
+/// Built-in scenes: (name, one-line description, deck text).
+pub const BUILTIN: &[(&str, &str, &str)] = &[
+    (
+        "cantilever",
+        "hex8 neo-Hookean cantilever bent to large deflection by a tip load (default scene)",
+        include_str!("scenes/cantilever.toml"),
+    ),
+    (
+        "patch-hex8",
+        "patch test: distorted hex8 cube under homogeneous triaxial traction, linear elastic",
+        include_str!("scenes/patch-hex8.toml"),
+    ),
+    (
+        "patch-tet4",
+        "patch test: tet4 cube under homogeneous triaxial traction, neo-Hookean",
+        include_str!("scenes/patch-tet4.toml"),
+    ),
+    (
+        "cube-stretch",
+        "neo-Hookean cube stretched to twice its length between rollers (closed-form stress)",
+        include_str!("scenes/cube-stretch.toml"),
+    ),
+];
+
+/// The scene `alfe` and `alfe run` use when none is named.
+pub const DEFAULT_SCENE: &str = "cantilever";
+
+/// A deck's text and where it came from.
+#[derive(Debug, Clone)]
+pub struct Source {
+    pub text: String,
+    /// Directory relative mesh paths are resolved from.
+    pub dir: PathBuf,
+    /// How to refer to it in messages (scene name or file path).
+    pub label: String,
+}
+
+/// Resolve a built-in scene name or a deck path.
+pub fn load(name_or_path: &str) -> Result<Source> {
+    if let Some((name, _, text)) = BUILTIN.iter().find(|(n, _, _)| *n == name_or_path) {
+        return Ok(Source { text: text.to_string(), dir: PathBuf::from("."), label: name.to_string() });
+    }
+    let p = Path::new(name_or_path);
+    if p.is_file() {
+        let text = std::fs::read_to_string(p)
+            .map_err(|e| Error::input(format!("cannot read deck `{}`: {e}", p.display())))?;
+        let dir = p.parent().map(|d| if d.as_os_str().is_empty() { Path::new(".") } else { d }).unwrap_or(Path::new(".")).to_path_buf();
+        return Ok(Source { text, dir, label: p.display().to_string() });
+    }
+    let names: Vec<&str> = BUILTIN.iter().map(|(n, _, _)| *n).collect();
+    Err(Error::input(format!(
+        "unknown scene `{name_or_path}`: not a built-in scene ({}) and no deck file by that path",
+        names.join(", ")
+    )))
+}
+
+/// Parse, build and validate a scene.
+pub fn model(src: &Source) -> Result<crate::model::def::ModelDef> {
+    let deck = deck::parse(&src.text).map_err(|e| Error::input(format!("deck {}: {e}", src.label)))?;
+    build::build(&deck, &src.dir).map_err(|e| e.context(format!("deck {}", src.label)))
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn every_builtin_scene_parses() {
+        for (name, _, text) in super::BUILTIN {
+            let d = super::deck::parse(text).unwrap_or_else(|e| panic!("{name}: {e}"));
+            assert_eq!(d.scene.name, *name);
+        }
+    }
+}

@@ -1,0 +1,124 @@
+//! Static load stepping over pseudo-time: t = step, 2·step, ..., end_time (the last
+//! step shortened to land on end_time). Each step is one nonlinear solve from the
+//! previous converged state. A step that fails ends the run (retries come with the
+//! step controller of the solver issue); everything converged before it is kept.
+
+use crate::model::Model;
+use crate::parallel::Comm;
+use crate::solve::linear::block_jacobi::BlockJacobi;
+use crate::solve::linear::matrix::DistMatrix;
+use crate::solve::nonlinear::newton::{newton, NewtonOptions};
+use crate::solve::nonlinear::{NonlinearProblem, SolveStats};
+use crate::Result;
+use std::time::Instant;
+
+/// The model at a fixed time, seen as a nonlinear problem.
+pub struct StaticProblem<'a> {
+    pub model: &'a mut Model,
+    pub time: f64,
+}
+
+impl NonlinearProblem for StaticProblem<'_> {
+    fn residual(&mut self, comm: &dyn Comm, u: &[f64], r: &mut [f64]) -> Result<f64> {
+        Ok(self.model.residual(comm, u, self.time, r)?.f_ref)
+    }
+    fn jacobian(&mut self, comm: &dyn Comm, u: &[f64], k: &mut DistMatrix) -> Result<()> {
+        self.model.jacobian(comm, u, self.time, k)
+    }
+}
+
+/// One converged (or the failed last) step.
+#[derive(Debug, Clone)]
+pub struct StepRecord {
+    pub step: usize,
+    pub time: f64,
+    pub stats: SolveStats,
+    pub retries: usize,
+    /// Reaction force of each reaction set (model order).
+    pub reactions: Vec<[f64; 3]>,
+    pub wall_seconds: f64,
+}
+
+/// Totals over the run.
+#[derive(Debug, Clone, Default)]
+pub struct RunTotals {
+    pub steps: usize,
+    pub converged: bool,
+    pub nonlinear_iterations: usize,
+    pub linear_iterations: usize,
+    pub residual_evaluations: usize,
+    pub factorizations: usize,
+    pub retries: usize,
+    pub seconds_assembly: f64,
+    pub seconds_linear: f64,
+    /// Why the run stopped early, if it did.
+    pub failure: Option<String>,
+}
+
+/// The pseudo-times of the steps.
+pub fn step_times(end: f64, dt: f64) -> Vec<f64> {
+    let n = ((end / dt) - 1e-9).ceil().max(1.0) as usize;
+    (1..=n).map(|i| if i == n { end } else { i as f64 * dt }).collect()
+}
+
+/// Run the static analysis; `on_step` sees every converged step with the solution.
+pub fn run_static(
+    comm: &dyn Comm,
+    model: &mut Model,
+    u: &mut Vec<f64>,
+    opts: &NewtonOptions,
+    on_step: &mut dyn FnMut(&StepRecord, &[f64], &Model) -> Result<()>,
+) -> Result<RunTotals> {
+    let a = model.local.settings.analysis.clone();
+    let n = model.n_owned_dofs();
+    u.resize(n, 0.0);
+    let mut r = vec![0.0; n];
+    let mut k = model.new_matrix(comm);
+    let mut pc: Option<BlockJacobi> = None;
+    let mut tot = RunTotals::default();
+    for (i, &t) in step_times(a.end_time, a.step).iter().enumerate() {
+        let t0 = Instant::now();
+        let g = model.prescribed(t);
+        let mut trial = u.clone();
+        let stats = {
+            let mut prob = StaticProblem { model, time: t };
+            newton(comm, &mut prob, &mut trial, &mut r, &g, &mut k, &mut pc, opts)?
+        };
+        tot.nonlinear_iterations += stats.iterations;
+        tot.linear_iterations += stats.linear_iterations;
+        tot.residual_evaluations += stats.residual_evaluations;
+        tot.factorizations += stats.factorizations;
+        tot.seconds_assembly += stats.seconds_assembly;
+        tot.seconds_linear += stats.seconds_linear;
+        if !stats.converged {
+            tot.failure = Some(format!("step {} (t = {t}) did not converge: {}", i + 1, stats.reason));
+            return Ok(tot);
+        }
+        model.commit();
+        *u = trial;
+        tot.steps += 1;
+        let rec = StepRecord {
+            step: i + 1,
+            time: t,
+            reactions: model.reactions(comm, &r),
+            stats,
+            retries: 0,
+            wall_seconds: t0.elapsed().as_secs_f64(),
+        };
+        on_step(&rec, u, model)?;
+    }
+    tot.converged = true;
+    Ok(tot)
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn step_times_land_on_the_end() {
+        assert_eq!(super::step_times(1.0, 0.25), vec![0.25, 0.5, 0.75, 1.0]);
+        let t = super::step_times(1.0, 0.3);
+        assert_eq!(t.len(), 4);
+        assert_eq!(*t.last().unwrap(), 1.0);
+        assert_eq!(super::step_times(1.0, 0.1).len(), 10);
+    }
+}
