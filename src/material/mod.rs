@@ -11,8 +11,8 @@
 pub mod linear_elastic;
 pub mod neo_hookean;
 
-
-
+pub use linear_elastic::LinearElastic;
+pub use neo_hookean::NeoHookean;
 
 use nalgebra::Matrix3;
 
