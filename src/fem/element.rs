@@ -96,7 +96,7 @@ pub fn check_reference(kind: ElemKind, x0: &[[f64; 3]]) -> Result<(), String> {
     const TINY: f64 = 1e-6;
     let check = |det: f64, where_: &str, ref_vol: f64| -> Result<(), String> {
         let d = diameter(x0);
-        if !(det > 0.0) {
+        if det.is_nan() || det <= 0.0 {
             return Err(format!(
                 "inverted {}: det J = {det:.3e} ≤ 0 at {where_}",
                 kind.name()
@@ -259,6 +259,7 @@ fn add_force<const N: usize>(g: &[[f64; 3]; N], s: &[f64; 6], w: f64, f: &mut [f
 ///
 /// B_a rows (xx, yy, zz, xy, yz, xz) = [g1 0 0; 0 g2 0; 0 0 g3; g2 g1 0; 0 g3 g2; g3 0 g1].
 #[inline]
+#[allow(clippy::needless_range_loop)] // index form mirrors the B-matrix algebra
 fn add_tangent<const N: usize>(
     g: &[[f64; 3]; N],
     sp: &StressPoint,
@@ -312,27 +313,43 @@ fn add_tangent<const N: usize>(
     }
 }
 
-/// Kinematics at one point: the F handed to the material, the gradients the B matrix
-/// uses (∇_x N for finite, ∇_X N for small) and whether a geometric term applies.
+/// Kinematics at one point.
+struct PointKinematics<const N: usize> {
+    /// The F handed to the material.
+    f: Matrix3<f64>,
+    /// Gradients the B matrix uses: ∇_x N (finite) or ∇_X N (small).
+    grad: [[f64; 3]; N],
+    /// Whether the geometric (initial-stress) term applies.
+    geometric: bool,
+}
+
 #[inline]
 fn point_kinematics<const N: usize>(
     kin: Kinematics,
     u: &[[f64; 3]; N],
     grad0: &[[f64; 3]; N],
     g: usize,
-) -> Result<(Matrix3<f64>, [[f64; 3]; N], bool), ElementError> {
+) -> Result<PointKinematics<N>, ElementError> {
     let f = deformation_gradient(u, grad0);
     match kin {
-        Kinematics::Small => Ok((f, *grad0, false)),
+        Kinematics::Small => Ok(PointKinematics {
+            f,
+            grad: *grad0,
+            geometric: false,
+        }),
         Kinematics::Finite => {
             let j = f.determinant();
-            if !(j > 0.0) {
+            if j.is_nan() || j <= 0.0 {
                 return Err(ElementError(format!(
                     "det F = {j:.3e} ≤ 0 at Gauss point {g} (element inverted)"
                 )));
             }
             let grad = transform_gradients(&(cofactor(&f) / j), grad0);
-            Ok((f, grad, true))
+            Ok(PointKinematics {
+                f,
+                grad,
+                geometric: true,
+            })
         }
     }
 }
@@ -344,7 +361,7 @@ fn reference_point<const N: usize>(
     g: usize,
 ) -> Result<([[f64; 3]; N], f64), ElementError> {
     let (grad0, det0) = reference_gradients(x0, dn);
-    if !(det0 > 0.0) {
+    if det0.is_nan() || det0 <= 0.0 {
         return Err(ElementError(format!(
             "reference det J = {det0:.3e} ≤ 0 at Gauss point {g}"
         )));
@@ -378,7 +395,11 @@ fn force_kernel<const N: usize, const G: usize>(
     for g in 0..G {
         let (grad0, det0) = reference_point(x0, &tab.dn[g], g)?;
         let w = tab.weights[g] * det0;
-        let (fdef, grad, geometric) = point_kinematics(kin, u, &grad0, g)?;
+        let PointKinematics {
+            f: fdef,
+            grad,
+            geometric,
+        } = point_kinematics(kin, u, &grad0, g)?;
         let sp = mat
             .evaluate(
                 &fdef,
@@ -422,7 +443,7 @@ fn stress_kernel<const N: usize, const G: usize>(
     for g in 0..G {
         let (grad0, det0) = reference_point(x0, &tab.dn[g], g)?;
         let w = tab.weights[g] * det0;
-        let (fdef, _, _) = point_kinematics(kin, u, &grad0, g)?;
+        let fdef = point_kinematics(kin, u, &grad0, g)?.f;
         let sp = mat
             .evaluate(&fdef, &state_old[g * ns..(g + 1) * ns], scratch)
             .map_err(|e| ElementError(format!("material at Gauss point {g}: {}", e.0)))?;

@@ -37,7 +37,7 @@ impl Material for NeoHookean {
         _state_new: &mut [f64],
     ) -> Result<StressPoint, MaterialError> {
         let j = f.determinant();
-        if !(j > 0.0) {
+        if j.is_nan() || j <= 0.0 {
             return Err(MaterialError(format!(
                 "neo-Hookean: det F = {j:.3e} ≤ 0 (inverted)"
             )));
