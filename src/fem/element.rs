@@ -255,6 +255,10 @@ fn add_force<const N: usize>(g: &[[f64; 3]; N], s: &[f64; 6], w: f64, f: &mut [f
     }
 }
 
+/// An element tangent on the stack, `[a][i][b][j]`: the same memory order as the
+/// row-major 3n×3n output, filled without bounds checks and copied once.
+type LocalTangent<const N: usize> = [[[[f64; 3]; N]; 3]; N];
+
 /// K_ab += w [B_aᵀ c B_b + (g_a · τ g_b) I] (geometric term only if `geometric`).
 ///
 /// B_a rows (xx, yy, zz, xy, yz, xz) = [g1 0 0; 0 g2 0; 0 0 g3; g2 g1 0; 0 g3 g2; g3 0 g1].
@@ -265,15 +269,15 @@ fn add_tangent<const N: usize>(
     sp: &StressPoint,
     geometric: bool,
     w: f64,
-    k: &mut [f64],
+    k: &mut LocalTangent<N>,
 ) {
     let c = &sp.tangent;
     let s = &sp.stress;
-    // (c B_b) for every b, 6×3 each, and τ g_b.
+    // w c B_b for every b (6×3 each) and w τ g_b, so the pair loop has no extra scaling.
     let mut cb = [[[0.0; 3]; 6]; N];
     let mut tg = [[0.0; 3]; N];
     for b in 0..N {
-        let [g0, g1, g2] = g[b];
+        let [g0, g1, g2] = g[b].map(|v| w * v);
         for r in 0..6 {
             let cr = &c[r];
             cb[b][r] = [
@@ -290,24 +294,19 @@ fn add_tangent<const N: usize>(
             ];
         }
     }
-    let n3 = 3 * N;
     for a in 0..N {
         let [g0, g1, g2] = g[a];
+        let ka = &mut k[a];
         for b in 0..N {
             let m = &cb[b];
-            let geo = if geometric {
-                g0 * tg[b][0] + g1 * tg[b][1] + g2 * tg[b][2]
-            } else {
-                0.0
-            };
+            let geo = g0 * tg[b][0] + g1 * tg[b][1] + g2 * tg[b][2];
             for j in 0..3 {
-                let kx = g0 * m[0][j] + g1 * m[3][j] + g2 * m[5][j];
-                let ky = g1 * m[1][j] + g0 * m[3][j] + g2 * m[4][j];
-                let kz = g2 * m[2][j] + g1 * m[4][j] + g0 * m[5][j];
-                let col = 3 * b + j;
-                k[(3 * a) * n3 + col] += w * (kx + if j == 0 { geo } else { 0.0 });
-                k[(3 * a + 1) * n3 + col] += w * (ky + if j == 1 { geo } else { 0.0 });
-                k[(3 * a + 2) * n3 + col] += w * (kz + if j == 2 { geo } else { 0.0 });
+                ka[0][b][j] += g0 * m[0][j] + g1 * m[3][j] + g2 * m[5][j];
+                ka[1][b][j] += g1 * m[1][j] + g0 * m[3][j] + g2 * m[4][j];
+                ka[2][b][j] += g2 * m[2][j] + g1 * m[4][j] + g0 * m[5][j];
+            }
+            for i in 0..3 {
+                ka[i][b][i] += geo;
             }
         }
     }
@@ -378,7 +377,7 @@ fn force_kernel<const N: usize, const G: usize>(
     state_old: &[f64],
     state_new: &mut [f64],
     f: &mut [f64],
-    mut k: Option<&mut [f64]>,
+    k: Option<&mut [f64]>,
 ) -> Result<(), ElementError> {
     let ns = mat.n_state();
     assert_eq!(f.len(), 3 * N, "force slice length");
@@ -386,12 +385,34 @@ fn force_kernel<const N: usize, const G: usize>(
         state_old.len() == G * ns && state_new.len() == G * ns,
         "history length must be n_gauss × n_state"
     );
-    f.fill(0.0);
-    if let Some(k) = k.as_deref_mut() {
-        assert_eq!(k.len(), 9 * N * N, "tangent slice length");
-        k.fill(0.0);
+    match k {
+        Some(k) => {
+            assert_eq!(k.len(), 9 * N * N, "tangent slice length");
+            let mut kloc = [[[[0.0; 3]; N]; 3]; N];
+            gauss_loop(tab, x0, u, mat, state_old, state_new, f, Some(&mut kloc))?;
+            k.copy_from_slice(kloc.as_flattened().as_flattened().as_flattened());
+            Ok(())
+        }
+        None => gauss_loop(tab, x0, u, mat, state_old, state_new, f, None),
     }
+}
+
+/// The integration-point loop shared by force and force + tangent.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn gauss_loop<const N: usize, const G: usize>(
+    tab: &Tabulated<3, N, G>,
+    x0: &[[f64; 3]; N],
+    u: &[[f64; 3]; N],
+    mat: &dyn Material,
+    state_old: &[f64],
+    state_new: &mut [f64],
+    f: &mut [f64],
+    mut k: Option<&mut LocalTangent<N>>,
+) -> Result<(), ElementError> {
+    let ns = mat.n_state();
     let kin = mat.kinematics();
+    f.fill(0.0);
     for g in 0..G {
         let (grad0, det0) = reference_point(x0, &tab.dn[g], g)?;
         let w = tab.weights[g] * det0;
