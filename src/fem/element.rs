@@ -94,8 +94,8 @@ pub fn check_reference(kind: ElemKind, x0: &[[f64; 3]]) -> Result<(), String> {
     // Scaled Jacobian det J · (reference volume) / diameter³: ≈ 0.19 for a cube and
     // ≈ 0.12 for a regular tet, so 1e-6 only flags elements that are flat in practice.
     const TINY: f64 = 1e-6;
+    let d = diameter(x0);
     let check = |det: f64, where_: &str, ref_vol: f64| -> Result<(), String> {
-        let d = diameter(x0);
         if det.is_nan() || det <= 0.0 {
             return Err(format!(
                 "inverted {}: det J = {det:.3e} ≤ 0 at {where_}",
