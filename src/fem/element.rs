@@ -1,1 +1,832 @@
-//! (being written)
+//! Solid element kernels: internal force, consistent tangent and stress of one hex8 or
+//! tet4, total Lagrangian written in the spatial form of Simo & Hughes, *Computational
+//! Inelasticity*, §7.2 / Bonet & Wood, *Nonlinear Continuum Mechanics for FEA*, §8–9:
+//!
+//! * F = I + Σ_a u_a ⊗ ∇_X N_a,   ∇_x N_a = F⁻ᵀ ∇_X N_a;
+//! * f_a = Σ_gp τ ∇_x N_a w det J₀  (= ∫ P ∇_X N_a dV with P = τ F⁻ᵀ);
+//! * K_ab = Σ_gp [B_aᵀ c B_b + (∇_x N_a · τ ∇_x N_b) I] w det J₀ (material + geometric),
+//!   with c the spatial tangent of the Kirchhoff stress and B the spatial
+//!   strain-displacement matrix with engineering shear (B&W eq. 9.35–9.44).
+//!
+//! For [`Kinematics::Small`] the same loop runs with ∇_X in place of ∇_x, the Cauchy
+//! stress, and no geometric term (Hughes, *The Finite Element Method*, §3.9).
+//!
+//! Everything is on the stack with const-generic node and point counts. The per-point
+//! pieces ([`reference_gradients`], [`deformation_gradient`], the force and tangent
+//! accumulators) are separate so an F-bar hex8 (F̄ = (J̄/J)^{1/3} F, de Souza Neto et al.
+//! 1996) can reuse them with only a modified F and an extra tangent term.
+
+use super::shape::{Tabulated, HEX8, HEX8_NODES, TET4};
+use crate::material::{Kinematics, Material, StressPoint};
+use crate::mesh::ElemKind;
+use nalgebra::Matrix3;
+use std::fmt;
+
+/// Why an element could not be evaluated (inverted element, material failure).
+#[derive(Debug, Clone, PartialEq)]
+pub struct ElementError(pub String);
+
+impl fmt::Display for ElementError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for ElementError {}
+
+/// Number of integration points of the kind's rule (history is stored per point).
+pub fn n_gauss(kind: ElemKind) -> usize {
+    match kind {
+        ElemKind::Hex8 => 8,
+        ElemKind::Tet4 => 1,
+    }
+}
+
+/// Internal force f (len 3n, node-major: `f[3a+i]`) and, if `k` is `Some`, the
+/// consistent tangent (3n×3n row-major, `k[(3a+i)*3n + 3b+j]`) of one element.
+///
+/// `x0`: reference coordinates of the element nodes, `u`: nodal displacements.
+/// `state_old`/`state_new`: `n_gauss(kind) * mat.n_state()` history values (empty for
+/// elastic models). `f` and `k` are overwritten, not accumulated.
+///
+/// Finite kinematics: det F ≤ 0 at a point is an error. Small kinematics never checks
+/// det F: a linear model is defined for any displacement, and Newton's first trial on a
+/// linear problem may overshoot without meaning anything.
+///
+/// # Panics
+/// If slice lengths do not match the kind (a caller bug, not a model condition).
+#[allow(clippy::too_many_arguments)]
+pub fn element_force(
+    kind: ElemKind,
+    x0: &[[f64; 3]],
+    u: &[[f64; 3]],
+    mat: &dyn Material,
+    state_old: &[f64],
+    state_new: &mut [f64],
+    f: &mut [f64],
+    k: Option<&mut [f64]>,
+) -> Result<(), ElementError> {
+    match kind {
+        ElemKind::Hex8 => force_kernel(&HEX8, nodes(x0), nodes(u), mat, state_old, state_new, f, k),
+        ElemKind::Tet4 => force_kernel(&TET4, nodes(x0), nodes(u), mat, state_old, state_new, f, k),
+    }
+}
+
+/// Volume-averaged Cauchy stress σ (Voigt) of the element at displacement `u`:
+/// (1/v) ∫ σ dv = Σ τ w det J₀ / Σ J w det J₀ (finite), or the plain average of σ (small).
+pub fn element_stress(
+    kind: ElemKind,
+    x0: &[[f64; 3]],
+    u: &[[f64; 3]],
+    mat: &dyn Material,
+    state_old: &[f64],
+) -> Result<[f64; 6], ElementError> {
+    match kind {
+        ElemKind::Hex8 => stress_kernel(&HEX8, nodes(x0), nodes(u), mat, state_old),
+        ElemKind::Tet4 => stress_kernel(&TET4, nodes(x0), nodes(u), mat, state_old),
+    }
+}
+
+/// Reference-configuration check: `Err` with a short reason if det J ≤ 0, or tiny
+/// relative to the element's size, at any Gauss point or corner (an inverted or
+/// degenerate element). Corners catch warped hexes that the Gauss points miss.
+pub fn check_reference(kind: ElemKind, x0: &[[f64; 3]]) -> Result<(), String> {
+    // Scaled Jacobian det J · (reference volume) / diameter³: ≈ 0.19 for a cube and
+    // ≈ 0.12 for a regular tet, so 1e-6 only flags elements that are flat in practice.
+    const TINY: f64 = 1e-6;
+    let d = diameter(x0);
+    let check = |det: f64, where_: &str, ref_vol: f64| -> Result<(), String> {
+        if det.is_nan() || det <= 0.0 {
+            return Err(format!(
+                "inverted {}: det J = {det:.3e} ≤ 0 at {where_}",
+                kind.name()
+            ));
+        }
+        if det * ref_vol < TINY * d * d * d {
+            return Err(format!(
+                "degenerate {}: det J = {det:.3e} at {where_} is tiny for its size {d:.3e}",
+                kind.name()
+            ));
+        }
+        Ok(())
+    };
+    match kind {
+        ElemKind::Hex8 => {
+            let x0: &[[f64; 3]; 8] = nodes(x0);
+            for g in 0..8 {
+                check(
+                    reference_gradients(x0, &HEX8.dn[g]).1,
+                    &format!("Gauss point {g}"),
+                    8.0,
+                )?;
+            }
+            for (c, xi) in HEX8_NODES.iter().enumerate() {
+                let dn = super::shape::hex8_dn(*xi);
+                check(reference_gradients(x0, &dn).1, &format!("corner {c}"), 8.0)?;
+            }
+            Ok(())
+        }
+        ElemKind::Tet4 => check(
+            reference_gradients(nodes::<4>(x0), &TET4.dn[0]).1,
+            "its centroid",
+            1.0 / 6.0,
+        ),
+    }
+}
+
+/// Reference volume (exact for both kinds: det J of a trilinear map is integrated exactly
+/// by the 2×2×2 rule). Negative for an inverted element.
+pub fn element_volume(kind: ElemKind, x0: &[[f64; 3]]) -> f64 {
+    fn vol<const N: usize, const G: usize>(t: &Tabulated<3, N, G>, x0: &[[f64; 3]; N]) -> f64 {
+        (0..G)
+            .map(|g| t.weights[g] * reference_gradients(x0, &t.dn[g]).1)
+            .sum()
+    }
+    match kind {
+        ElemKind::Hex8 => vol(&HEX8, nodes(x0)),
+        ElemKind::Tet4 => vol(&TET4, nodes(x0)),
+    }
+}
+
+/// A characteristic length |volume|^(1/3); used for finite-difference step sizes and
+/// penalty scales.
+pub fn char_length(kind: ElemKind, x0: &[[f64; 3]]) -> f64 {
+    element_volume(kind, x0).abs().cbrt()
+}
+
+/// von Mises equivalent stress √(3/2 s:s) of a Voigt stress (s the deviator).
+pub fn von_mises(s: &[f64; 6]) -> f64 {
+    let (a, b, c) = (s[0] - s[1], s[1] - s[2], s[2] - s[0]);
+    (0.5 * (a * a + b * b + c * c) + 3.0 * (s[3] * s[3] + s[4] * s[4] + s[5] * s[5])).sqrt()
+}
+
+/// View a node slice as a fixed-size array; a length mismatch is a caller bug.
+#[inline]
+fn nodes<const N: usize>(x: &[[f64; 3]]) -> &[[f64; 3]; N] {
+    x.try_into()
+        .unwrap_or_else(|_| panic!("element has {} nodes, kind needs {N}", x.len()))
+}
+
+/// Largest distance between two nodes.
+fn diameter(x: &[[f64; 3]]) -> f64 {
+    let mut d2: f64 = 0.0;
+    for (i, a) in x.iter().enumerate() {
+        for b in &x[i + 1..] {
+            d2 = d2.max((0..3).map(|k| (a[k] - b[k]).powi(2)).sum());
+        }
+    }
+    d2.sqrt()
+}
+
+/// Cofactor matrix: A⁻ᵀ = cof(A) / det A without a failure branch.
+#[inline]
+fn cofactor(m: &Matrix3<f64>) -> Matrix3<f64> {
+    let c = |r0: usize, r1: usize, c0: usize, c1: usize| {
+        m[(r0, c0)] * m[(r1, c1)] - m[(r0, c1)] * m[(r1, c0)]
+    };
+    Matrix3::new(
+        c(1, 2, 1, 2),
+        -c(1, 2, 0, 2),
+        c(1, 2, 0, 1),
+        -c(0, 2, 1, 2),
+        c(0, 2, 0, 2),
+        -c(0, 2, 0, 1),
+        c(0, 1, 1, 2),
+        -c(0, 1, 0, 2),
+        c(0, 1, 0, 1),
+    )
+}
+
+/// Reference gradients ∇_X N_a = J₀⁻ᵀ ∂N_a/∂ξ and det J₀ at one point, with
+/// J₀ = Σ_a x0_a ⊗ ∂N_a/∂ξ. If det J₀ = 0 the gradients are not finite: check it first.
+#[inline]
+pub fn reference_gradients<const N: usize>(
+    x0: &[[f64; 3]; N],
+    dn: &[[f64; 3]; N],
+) -> ([[f64; 3]; N], f64) {
+    let mut j = Matrix3::zeros();
+    for (x, d) in x0.iter().zip(dn) {
+        for r in 0..3 {
+            for c in 0..3 {
+                j[(r, c)] += x[r] * d[c];
+            }
+        }
+    }
+    let det = j.determinant();
+    (transform_gradients(&(cofactor(&j) / det), dn), det)
+}
+
+/// g_a ← M g_a for every node (M = J₀⁻ᵀ or F⁻ᵀ).
+#[inline]
+fn transform_gradients<const N: usize>(m: &Matrix3<f64>, g: &[[f64; 3]; N]) -> [[f64; 3]; N] {
+    let mut out = [[0.0; 3]; N];
+    for (o, d) in out.iter_mut().zip(g) {
+        for r in 0..3 {
+            o[r] = m[(r, 0)] * d[0] + m[(r, 1)] * d[1] + m[(r, 2)] * d[2];
+        }
+    }
+    out
+}
+
+/// F = I + Σ_a u_a ⊗ ∇_X N_a.
+#[inline]
+pub fn deformation_gradient<const N: usize>(
+    u: &[[f64; 3]; N],
+    grad0: &[[f64; 3]; N],
+) -> Matrix3<f64> {
+    let mut f = Matrix3::identity();
+    for (ua, g) in u.iter().zip(grad0) {
+        for r in 0..3 {
+            for c in 0..3 {
+                f[(r, c)] += ua[r] * g[c];
+            }
+        }
+    }
+    f
+}
+
+/// f_a += w τ g_a (τ symmetric, Voigt).
+#[inline]
+fn add_force<const N: usize>(g: &[[f64; 3]; N], s: &[f64; 6], w: f64, f: &mut [f64]) {
+    for (fa, ga) in f.chunks_exact_mut(3).zip(g) {
+        fa[0] += w * (s[0] * ga[0] + s[3] * ga[1] + s[5] * ga[2]);
+        fa[1] += w * (s[3] * ga[0] + s[1] * ga[1] + s[4] * ga[2]);
+        fa[2] += w * (s[5] * ga[0] + s[4] * ga[1] + s[2] * ga[2]);
+    }
+}
+
+/// An element tangent on the stack, `[a][i][b][j]`: the same memory order as the
+/// row-major 3n×3n output, filled without bounds checks and copied once.
+type LocalTangent<const N: usize> = [[[[f64; 3]; N]; 3]; N];
+
+/// K_ab += w [B_aᵀ c B_b + (g_a · τ g_b) I] (geometric term only if `geometric`).
+///
+/// B_a rows (xx, yy, zz, xy, yz, xz) = [g1 0 0; 0 g2 0; 0 0 g3; g2 g1 0; 0 g3 g2; g3 0 g1].
+#[inline]
+#[allow(clippy::needless_range_loop)] // index form mirrors the B-matrix algebra
+fn add_tangent<const N: usize>(
+    g: &[[f64; 3]; N],
+    sp: &StressPoint,
+    geometric: bool,
+    w: f64,
+    k: &mut LocalTangent<N>,
+) {
+    let c = &sp.tangent;
+    let s = &sp.stress;
+    // w c B_b for every b (6×3 each) and w τ g_b, so the pair loop has no extra scaling.
+    let mut cb = [[[0.0; 3]; 6]; N];
+    let mut tg = [[0.0; 3]; N];
+    for b in 0..N {
+        let [g0, g1, g2] = g[b].map(|v| w * v);
+        for r in 0..6 {
+            let cr = &c[r];
+            cb[b][r] = [
+                cr[0] * g0 + cr[3] * g1 + cr[5] * g2,
+                cr[1] * g1 + cr[3] * g0 + cr[4] * g2,
+                cr[2] * g2 + cr[4] * g1 + cr[5] * g0,
+            ];
+        }
+        if geometric {
+            tg[b] = [
+                s[0] * g0 + s[3] * g1 + s[5] * g2,
+                s[3] * g0 + s[1] * g1 + s[4] * g2,
+                s[5] * g0 + s[4] * g1 + s[2] * g2,
+            ];
+        }
+    }
+    for a in 0..N {
+        let [g0, g1, g2] = g[a];
+        let ka = &mut k[a];
+        for b in 0..N {
+            let m = &cb[b];
+            let geo = g0 * tg[b][0] + g1 * tg[b][1] + g2 * tg[b][2];
+            for j in 0..3 {
+                ka[0][b][j] += g0 * m[0][j] + g1 * m[3][j] + g2 * m[5][j];
+                ka[1][b][j] += g1 * m[1][j] + g0 * m[3][j] + g2 * m[4][j];
+                ka[2][b][j] += g2 * m[2][j] + g1 * m[4][j] + g0 * m[5][j];
+            }
+            for i in 0..3 {
+                ka[i][b][i] += geo;
+            }
+        }
+    }
+}
+
+/// Kinematics at one point.
+struct PointKinematics<const N: usize> {
+    /// The F handed to the material.
+    f: Matrix3<f64>,
+    /// Gradients the B matrix uses: ∇_x N (finite) or ∇_X N (small).
+    grad: [[f64; 3]; N],
+    /// Whether the geometric (initial-stress) term applies.
+    geometric: bool,
+}
+
+#[inline]
+fn point_kinematics<const N: usize>(
+    kin: Kinematics,
+    u: &[[f64; 3]; N],
+    grad0: &[[f64; 3]; N],
+    g: usize,
+) -> Result<PointKinematics<N>, ElementError> {
+    let f = deformation_gradient(u, grad0);
+    match kin {
+        Kinematics::Small => Ok(PointKinematics {
+            f,
+            grad: *grad0,
+            geometric: false,
+        }),
+        Kinematics::Finite => {
+            let j = f.determinant();
+            if j.is_nan() || j <= 0.0 {
+                return Err(ElementError(format!(
+                    "det F = {j:.3e} ≤ 0 at Gauss point {g} (element inverted)"
+                )));
+            }
+            let grad = transform_gradients(&(cofactor(&f) / j), grad0);
+            Ok(PointKinematics {
+                f,
+                grad,
+                geometric: true,
+            })
+        }
+    }
+}
+
+#[inline]
+fn reference_point<const N: usize>(
+    x0: &[[f64; 3]; N],
+    dn: &[[f64; 3]; N],
+    g: usize,
+) -> Result<([[f64; 3]; N], f64), ElementError> {
+    let (grad0, det0) = reference_gradients(x0, dn);
+    if det0.is_nan() || det0 <= 0.0 {
+        return Err(ElementError(format!(
+            "reference det J = {det0:.3e} ≤ 0 at Gauss point {g}"
+        )));
+    }
+    Ok((grad0, det0))
+}
+
+#[allow(clippy::too_many_arguments)]
+fn force_kernel<const N: usize, const G: usize>(
+    tab: &Tabulated<3, N, G>,
+    x0: &[[f64; 3]; N],
+    u: &[[f64; 3]; N],
+    mat: &dyn Material,
+    state_old: &[f64],
+    state_new: &mut [f64],
+    f: &mut [f64],
+    k: Option<&mut [f64]>,
+) -> Result<(), ElementError> {
+    let ns = mat.n_state();
+    assert_eq!(f.len(), 3 * N, "force slice length");
+    assert!(
+        state_old.len() == G * ns && state_new.len() == G * ns,
+        "history length must be n_gauss × n_state"
+    );
+    match k {
+        Some(k) => {
+            assert_eq!(k.len(), 9 * N * N, "tangent slice length");
+            let mut kloc = [[[[0.0; 3]; N]; 3]; N];
+            gauss_loop(tab, x0, u, mat, state_old, state_new, f, Some(&mut kloc))?;
+            k.copy_from_slice(kloc.as_flattened().as_flattened().as_flattened());
+            Ok(())
+        }
+        None => gauss_loop(tab, x0, u, mat, state_old, state_new, f, None),
+    }
+}
+
+/// The integration-point loop shared by force and force + tangent.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn gauss_loop<const N: usize, const G: usize>(
+    tab: &Tabulated<3, N, G>,
+    x0: &[[f64; 3]; N],
+    u: &[[f64; 3]; N],
+    mat: &dyn Material,
+    state_old: &[f64],
+    state_new: &mut [f64],
+    f: &mut [f64],
+    mut k: Option<&mut LocalTangent<N>>,
+) -> Result<(), ElementError> {
+    let ns = mat.n_state();
+    let kin = mat.kinematics();
+    f.fill(0.0);
+    for g in 0..G {
+        let (grad0, det0) = reference_point(x0, &tab.dn[g], g)?;
+        let w = tab.weights[g] * det0;
+        let PointKinematics {
+            f: fdef,
+            grad,
+            geometric,
+        } = point_kinematics(kin, u, &grad0, g)?;
+        let sp = mat
+            .evaluate(
+                &fdef,
+                &state_old[g * ns..(g + 1) * ns],
+                &mut state_new[g * ns..(g + 1) * ns],
+            )
+            .map_err(|e| ElementError(format!("material at Gauss point {g}: {}", e.0)))?;
+        add_force(&grad, &sp.stress, w, f);
+        if let Some(k) = k.as_deref_mut() {
+            add_tangent(&grad, &sp, geometric, w, k);
+        }
+    }
+    Ok(())
+}
+
+fn stress_kernel<const N: usize, const G: usize>(
+    tab: &Tabulated<3, N, G>,
+    x0: &[[f64; 3]; N],
+    u: &[[f64; 3]; N],
+    mat: &dyn Material,
+    state_old: &[f64],
+) -> Result<[f64; 6], ElementError> {
+    const STACK: usize = 64;
+    let ns = mat.n_state();
+    assert_eq!(
+        state_old.len(),
+        G * ns,
+        "history length must be n_gauss × n_state"
+    );
+    // The material writes trial history somewhere; it is discarded here.
+    let mut stack = [0.0; STACK];
+    let mut heap = Vec::new();
+    let scratch: &mut [f64] = if ns <= STACK {
+        &mut stack[..ns]
+    } else {
+        heap.resize(ns, 0.0);
+        &mut heap
+    };
+    let kin = mat.kinematics();
+    let (mut sum, mut vol) = ([0.0; 6], 0.0);
+    for g in 0..G {
+        let (grad0, det0) = reference_point(x0, &tab.dn[g], g)?;
+        let w = tab.weights[g] * det0;
+        let fdef = point_kinematics(kin, u, &grad0, g)?.f;
+        let sp = mat
+            .evaluate(&fdef, &state_old[g * ns..(g + 1) * ns], scratch)
+            .map_err(|e| ElementError(format!("material at Gauss point {g}: {}", e.0)))?;
+        for (s, t) in sum.iter_mut().zip(&sp.stress) {
+            *s += w * t;
+        }
+        // Kirchhoff τ integrated over dV, divided by v = ∫ J dV, is the mean of σ over dv.
+        vol += w * if kin == Kinematics::Finite {
+            fdef.determinant()
+        } else {
+            1.0
+        };
+    }
+    Ok(sum.map(|s| s / vol))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::material::{LinearElastic, NeoHookean};
+    use nalgebra::{Rotation3, Vector3};
+
+    /// A unit-ish hex with every node moved off the cube by up to ~0.2 (non-parallel
+    /// faces, warped sides), positively oriented.
+    fn hex() -> Vec<[f64; 3]> {
+        let d = [
+            [0.05, -0.1, 0.02],
+            [0.2, 0.07, -0.05],
+            [-0.1, 0.15, 0.1],
+            [0.08, -0.05, -0.12],
+            [-0.07, 0.1, 0.15],
+            [0.12, -0.15, 0.04],
+            [0.18, 0.2, -0.08],
+            [-0.15, 0.05, 0.1],
+        ];
+        HEX8_NODES
+            .iter()
+            .zip(&d)
+            .map(|(p, d)| {
+                [
+                    0.5 * (p[0] + 1.0) * 1.4 + d[0],
+                    0.5 * (p[1] + 1.0) + d[1],
+                    0.5 * (p[2] + 1.0) * 0.8 + d[2],
+                ]
+            })
+            .collect()
+    }
+
+    fn tet() -> Vec<[f64; 3]> {
+        vec![
+            [0.1, -0.05, 0.02],
+            [1.2, 0.1, -0.1],
+            [0.2, 0.9, 0.15],
+            [0.1, 0.3, 1.1],
+        ]
+    }
+
+    fn mats() -> [Box<dyn Material>; 2] {
+        [
+            Box::new(NeoHookean::new(10.0, 0.35, 1.0)),
+            Box::new(LinearElastic::new(10.0, 0.35, 1.0)),
+        ]
+    }
+
+    /// u_a = (F − I) X_a + a deterministic wiggle of amplitude `wiggle`.
+    fn deform(x0: &[[f64; 3]], f: &Matrix3<f64>, wiggle: f64) -> Vec<[f64; 3]> {
+        x0.iter()
+            .enumerate()
+            .map(|(a, x)| {
+                let v = (f - Matrix3::identity()) * Vector3::from(*x);
+                let s = |i: usize| wiggle * (((7 * a + 3 * i) as f64) * 1.3).sin();
+                [v[0] + s(0), v[1] + s(1), v[2] + s(2)]
+            })
+            .collect()
+    }
+
+    fn force(
+        kind: ElemKind,
+        x0: &[[f64; 3]],
+        u: &[[f64; 3]],
+        mat: &dyn Material,
+        with_k: bool,
+    ) -> (Vec<f64>, Vec<f64>) {
+        let n = 3 * kind.n_nodes();
+        let mut f = vec![0.0; n];
+        let mut k = vec![0.0; n * n];
+        let kk = if with_k { Some(&mut k[..]) } else { None };
+        element_force(kind, x0, u, mat, &[], &mut [], &mut f, kk).unwrap();
+        (f, k)
+    }
+
+    fn some_f() -> Matrix3<f64> {
+        Matrix3::new(1.25, 0.2, -0.1, 0.05, 0.9, 0.15, -0.08, 0.1, 1.1)
+    }
+
+    fn cases() -> [(ElemKind, Vec<[f64; 3]>); 2] {
+        [(ElemKind::Hex8, hex()), (ElemKind::Tet4, tet())]
+    }
+
+    #[test]
+    fn rigid_translation_gives_zero_force() {
+        for (kind, x0) in cases() {
+            for mat in mats() {
+                let u = vec![[0.3, -1.7, 2.2]; kind.n_nodes()];
+                let (f, _) = force(kind, &x0, &u, mat.as_ref(), false);
+                assert!(f.iter().all(|v| v.abs() < 1e-13), "{kind:?} {mat:?}: {f:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn finite_rigid_rotation_gives_zero_force() {
+        let r = Rotation3::from_axis_angle(
+            &nalgebra::Unit::new_normalize(Vector3::new(1.0, 2.0, -0.5)),
+            60f64.to_radians(),
+        );
+        let rot = r.into_inner();
+        for (kind, x0) in cases() {
+            let mat = NeoHookean::new(10.0, 0.35, 1.0);
+            let mut u = deform(&x0, &rot, 0.0);
+            for ua in &mut u {
+                ua[0] += 0.4; // and a translation
+            }
+            let (f, _) = force(kind, &x0, &u, &mat, false);
+            assert!(f.iter().all(|v| v.abs() < 1e-13), "{kind:?}: {f:?}");
+            // Linear elasticity is not rotation invariant: the test can tell.
+            let (fl, _) = force(kind, &x0, &u, &LinearElastic::new(10.0, 0.35, 1.0), false);
+            assert!(fl.iter().any(|v| v.abs() > 1e-2));
+        }
+    }
+
+    #[test]
+    fn tangent_matches_central_difference() {
+        for (kind, x0) in cases() {
+            for mat in mats() {
+                let u = deform(&x0, &some_f(), 0.04);
+                let (_, k) = force(kind, &x0, &u, mat.as_ref(), true);
+                let n = 3 * kind.n_nodes();
+                let kmax = k.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+                let h = 1e-6 * char_length(kind, &x0);
+                for col in 0..n {
+                    let (mut up, mut um) = (u.clone(), u.clone());
+                    up[col / 3][col % 3] += h;
+                    um[col / 3][col % 3] -= h;
+                    let (fp, _) = force(kind, &x0, &up, mat.as_ref(), false);
+                    let (fm, _) = force(kind, &x0, &um, mat.as_ref(), false);
+                    for row in 0..n {
+                        let fd = (fp[row] - fm[row]) / (2.0 * h);
+                        let an = k[row * n + col];
+                        assert!(
+                            (fd - an).abs() < 1e-6 * kmax,
+                            "{kind:?} {mat:?} K[{row},{col}] = {an}, fd {fd}"
+                        );
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn neo_hookean_tangent_is_symmetric() {
+        for (kind, x0) in cases() {
+            let u = deform(&x0, &some_f(), 0.04);
+            let (_, k) = force(kind, &x0, &u, &NeoHookean::new(10.0, 0.35, 1.0), true);
+            let n = 3 * kind.n_nodes();
+            let kmax = k.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            for i in 0..n {
+                for j in 0..i {
+                    assert!((k[i * n + j] - k[j * n + i]).abs() < 1e-12 * kmax);
+                }
+            }
+        }
+    }
+
+    /// For homogeneous F, f_a = V P ∇_X N_a integrated exactly, so Σ_a f_a ⊗ X_a = V P
+    /// (because Σ_a ∇_X N_a ⊗ X_a = I) and Σ_a f_a = 0; the element stress is σ = τ / J.
+    #[test]
+    fn homogeneous_deformation_gives_exact_forces_and_stress() {
+        let fdef = some_f();
+        for (kind, x0) in cases() {
+            for mat in mats() {
+                let u = deform(&x0, &fdef, 0.0);
+                let (f, _) = force(kind, &x0, &u, mat.as_ref(), false);
+                let sp = mat.evaluate(&fdef, &[], &mut []).unwrap();
+                let s = sp.stress;
+                let tau = Matrix3::new(s[0], s[3], s[5], s[3], s[1], s[4], s[5], s[4], s[2]);
+                let (p, sigma) = match mat.kinematics() {
+                    Kinematics::Finite => {
+                        let j = fdef.determinant();
+                        (tau * fdef.try_inverse().unwrap().transpose(), tau / j)
+                    }
+                    Kinematics::Small => (tau, tau),
+                };
+                let vol = element_volume(kind, &x0);
+                let mut m = Matrix3::zeros();
+                let mut sum = [0.0; 3];
+                for (a, x) in x0.iter().enumerate() {
+                    for i in 0..3 {
+                        sum[i] += f[3 * a + i];
+                        for c in 0..3 {
+                            m[(i, c)] += f[3 * a + i] * x[c];
+                        }
+                    }
+                }
+                assert!(
+                    (m - p * vol).norm() < 1e-12 * p.norm(),
+                    "{kind:?} {mat:?}: {m} vs {}",
+                    p * vol
+                );
+                assert!(sum.iter().all(|v| v.abs() < 1e-12 * p.norm()));
+                let st = element_stress(kind, &x0, &u, mat.as_ref(), &[]).unwrap();
+                let want = [
+                    sigma[(0, 0)],
+                    sigma[(1, 1)],
+                    sigma[(2, 2)],
+                    sigma[(0, 1)],
+                    sigma[(1, 2)],
+                    sigma[(0, 2)],
+                ];
+                for (a, b) in st.iter().zip(&want) {
+                    assert!((a - b).abs() < 1e-12 * sigma.norm(), "{st:?} vs {want:?}");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn inverted_deformation_is_an_error() {
+        let x0 = hex();
+        let flip = Matrix3::from_diagonal(&Vector3::new(1.0, 1.0, -0.5));
+        let u = deform(&x0, &flip, 0.0);
+        let mut f = vec![0.0; 24];
+        let mat = NeoHookean::new(10.0, 0.3, 1.0);
+        let e =
+            element_force(ElemKind::Hex8, &x0, &u, &mat, &[], &mut [], &mut f, None).unwrap_err();
+        assert!(e.0.contains("det F"), "{e:?}");
+        assert!(element_stress(ElemKind::Hex8, &x0, &u, &mat, &[]).is_err());
+    }
+
+    #[test]
+    fn reference_check() {
+        assert!(check_reference(ElemKind::Hex8, &hex()).is_ok());
+        assert!(check_reference(ElemKind::Tet4, &tet()).is_ok());
+        // Two nodes swapped: a bow-tie.
+        let mut h = hex();
+        h.swap(0, 1);
+        assert!(check_reference(ElemKind::Hex8, &h)
+            .unwrap_err()
+            .contains("inverted"));
+        // Mirrored: negative everywhere.
+        let m: Vec<[f64; 3]> = hex().iter().map(|x| [-x[0], x[1], x[2]]).collect();
+        assert!(check_reference(ElemKind::Hex8, &m)
+            .unwrap_err()
+            .contains("inverted"));
+        assert!(check_reference(
+            ElemKind::Tet4,
+            &[[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]
+        )
+        .is_ok());
+        let mut t = tet();
+        t.swap(1, 2);
+        assert!(check_reference(ElemKind::Tet4, &t)
+            .unwrap_err()
+            .contains("inverted"));
+        // Flat tet: apex in the base plane (up to round-off).
+        let flat = [
+            [0.0; 3],
+            [1.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [0.3, 0.3, 1e-12],
+        ];
+        assert!(check_reference(ElemKind::Tet4, &flat)
+            .unwrap_err()
+            .contains("degenerate"));
+        // A hex whose top face is folded down through the bottom at one corner: fine at
+        // some Gauss points, negative at the corner.
+        let mut h = HEX8_NODES
+            .iter()
+            .map(|p| [p[0], p[1], p[2]])
+            .collect::<Vec<_>>();
+        h[6] = [0.6, 0.6, -0.8];
+        let e = check_reference(ElemKind::Hex8, &h).unwrap_err();
+        assert!(e.contains("corner"), "{e}");
+    }
+
+    #[test]
+    fn volume_and_length() {
+        // Affine image of the unit cube / reference tet: volume det A (times 1/6).
+        let a = Matrix3::new(2.0, 0.3, 0.1, 0.0, 1.5, -0.2, 0.1, 0.0, 0.7);
+        let map = |p: [f64; 3]| {
+            let v = a * Vector3::from(p);
+            [v[0] + 1.0, v[1] - 2.0, v[2]]
+        };
+        let h: Vec<_> = HEX8_NODES
+            .iter()
+            .map(|p| map([0.5 * (p[0] + 1.0), 0.5 * (p[1] + 1.0), 0.5 * (p[2] + 1.0)]))
+            .collect();
+        assert!((element_volume(ElemKind::Hex8, &h) - a.determinant()).abs() < 1e-13);
+        assert!((char_length(ElemKind::Hex8, &h) - a.determinant().cbrt()).abs() < 1e-13);
+        let t: Vec<_> = [[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]
+            .into_iter()
+            .map(map)
+            .collect();
+        assert!((element_volume(ElemKind::Tet4, &t) - a.determinant() / 6.0).abs() < 1e-13);
+    }
+
+    #[test]
+    fn von_mises_values() {
+        assert!((von_mises(&[3.0, 0.0, 0.0, 0.0, 0.0, 0.0]) - 3.0).abs() < 1e-14);
+        assert!((von_mises(&[0.0, 0.0, 0.0, 0.0, 2.0, 0.0]) - 2.0 * 3f64.sqrt()).abs() < 1e-14);
+        assert!(von_mises(&[5.0, 5.0, 5.0, 0.0, 0.0, 0.0]).abs() < 1e-14);
+    }
+
+    #[test]
+    fn history_is_passed_per_point() {
+        /// Records the history slice it was given into the new one, times two.
+        #[derive(Debug)]
+        struct Probe;
+        impl Material for Probe {
+            fn kinematics(&self) -> Kinematics {
+                Kinematics::Small
+            }
+            fn n_state(&self) -> usize {
+                2
+            }
+            fn evaluate(
+                &self,
+                _: &Matrix3<f64>,
+                old: &[f64],
+                new: &mut [f64],
+            ) -> Result<StressPoint, crate::material::MaterialError> {
+                new[0] = 2.0 * old[0];
+                new[1] = 2.0 * old[1];
+                Ok(StressPoint {
+                    stress: [0.0; 6],
+                    tangent: [[0.0; 6]; 6],
+                })
+            }
+            fn shear_modulus(&self) -> f64 {
+                1.0
+            }
+            fn bulk_modulus(&self) -> f64 {
+                1.0
+            }
+            fn density(&self) -> f64 {
+                1.0
+            }
+        }
+        let old: Vec<f64> = (0..16).map(|i| i as f64).collect();
+        let mut new = vec![0.0; 16];
+        let mut f = vec![0.0; 24];
+        element_force(
+            ElemKind::Hex8,
+            &hex(),
+            &[[0.0; 3]; 8],
+            &Probe,
+            &old,
+            &mut new,
+            &mut f,
+            None,
+        )
+        .unwrap();
+        assert!(new.iter().zip(&old).all(|(n, o)| *n == 2.0 * o));
+    }
+}

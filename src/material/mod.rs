@@ -11,6 +11,9 @@
 pub mod linear_elastic;
 pub mod neo_hookean;
 
+pub use linear_elastic::LinearElastic;
+pub use neo_hookean::NeoHookean;
+
 use nalgebra::Matrix3;
 
 /// Which strain measure the element uses with this material.
