@@ -26,13 +26,22 @@ pub type Result<T> = std::result::Result<T, Error>;
 
 impl Error {
     pub fn input(message: impl Into<String>) -> Self {
-        Self { kind: ErrorKind::Input, message: message.into() }
+        Self {
+            kind: ErrorKind::Input,
+            message: message.into(),
+        }
     }
     pub fn convergence(message: impl Into<String>) -> Self {
-        Self { kind: ErrorKind::Convergence, message: message.into() }
+        Self {
+            kind: ErrorKind::Convergence,
+            message: message.into(),
+        }
     }
     pub fn runtime(message: impl Into<String>) -> Self {
-        Self { kind: ErrorKind::Runtime, message: message.into() }
+        Self {
+            kind: ErrorKind::Runtime,
+            message: message.into(),
+        }
     }
     pub fn exit_code(&self) -> i32 {
         match self.kind {

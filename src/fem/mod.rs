@@ -4,5 +4,3 @@
 pub mod element;
 pub mod shape;
 pub mod surface;
-
-

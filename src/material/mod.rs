@@ -11,9 +11,6 @@
 pub mod linear_elastic;
 pub mod neo_hookean;
 
-
-
-
 use nalgebra::Matrix3;
 
 /// Which strain measure the element uses with this material.

@@ -48,7 +48,9 @@ impl ElemKind {
 }
 
 /// A face of an element: element index and local face number in [`ElemKind::faces`].
-#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, serde::Serialize, serde::Deserialize)]
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, serde::Serialize, serde::Deserialize,
+)]
 pub struct FaceRef {
     pub elem: usize,
     pub face: u8,
@@ -84,7 +86,10 @@ impl Mesh {
     /// Global node numbers of one face, in the face's outward order.
     pub fn face_nodes(&self, f: FaceRef) -> Vec<usize> {
         let en = self.elem_nodes(f.elem);
-        self.kinds[f.elem].faces()[f.face as usize].iter().map(|&i| en[i]).collect()
+        self.kinds[f.elem].faces()[f.face as usize]
+            .iter()
+            .map(|&i| en[i])
+            .collect()
     }
     pub fn push_elem(&mut self, kind: ElemKind, nodes: &[usize], part: u32) {
         if self.offsets.is_empty() {
@@ -105,16 +110,25 @@ impl Mesh {
             self.push_elem(other.kinds[e], &nodes, other.elem_part[e]);
         }
         for (k, v) in &other.node_groups {
-            self.node_groups.entry(k.clone()).or_default().extend(v.iter().map(|&n| n + n0));
+            self.node_groups
+                .entry(k.clone())
+                .or_default()
+                .extend(v.iter().map(|&n| n + n0));
         }
         for (k, v) in &other.face_groups {
             self.face_groups
                 .entry(k.clone())
                 .or_default()
-                .extend(v.iter().map(|f| FaceRef { elem: f.elem + e0, face: f.face }));
+                .extend(v.iter().map(|f| FaceRef {
+                    elem: f.elem + e0,
+                    face: f.face,
+                }));
         }
         for (k, v) in &other.elem_groups {
-            self.elem_groups.entry(k.clone()).or_default().extend(v.iter().map(|&e| e + e0));
+            self.elem_groups
+                .entry(k.clone())
+                .or_default()
+                .extend(v.iter().map(|&e| e + e0));
         }
     }
     /// Faces that belong to exactly one element (the boundary), sorted.
@@ -122,13 +136,20 @@ impl Mesh {
         let mut seen: std::collections::HashMap<Vec<usize>, (FaceRef, u32)> = Default::default();
         for e in 0..self.n_elems() {
             for (fi, _) in self.kinds[e].faces().iter().enumerate() {
-                let f = FaceRef { elem: e, face: fi as u8 };
+                let f = FaceRef {
+                    elem: e,
+                    face: fi as u8,
+                };
                 let mut key = self.face_nodes(f);
                 key.sort_unstable();
                 seen.entry(key).and_modify(|v| v.1 += 1).or_insert((f, 1));
             }
         }
-        let mut out: Vec<FaceRef> = seen.into_values().filter(|v| v.1 == 1).map(|v| v.0).collect();
+        let mut out: Vec<FaceRef> = seen
+            .into_values()
+            .filter(|v| v.1 == 1)
+            .map(|v| v.0)
+            .collect();
         out.sort();
         out
     }

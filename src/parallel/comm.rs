@@ -21,11 +21,14 @@ pub trait Comm {
     /// `send_counts[r]` goes to rank r; the result's `[r]` comes from rank r.
     fn alltoall_counts(&self, send_counts: &[usize]) -> Vec<usize>;
     /// Personalised exchange of f64: `send` holds the blocks for rank 0, 1, ... in order.
-    fn alltoallv_f64(&self, send: &[f64], send_counts: &[usize], recv_counts: &[usize]) -> Vec<f64>;
+    fn alltoallv_f64(&self, send: &[f64], send_counts: &[usize], recv_counts: &[usize])
+        -> Vec<f64>;
     /// Personalised exchange of u64 (indices).
-    fn alltoallv_u64(&self, send: &[u64], send_counts: &[usize], recv_counts: &[usize]) -> Vec<u64>;
+    fn alltoallv_u64(&self, send: &[u64], send_counts: &[usize], recv_counts: &[usize])
+        -> Vec<u64>;
     /// Personalised exchange of raw bytes (serialised records).
-    fn alltoallv_bytes(&self, send: &[u8], send_counts: &[usize], recv_counts: &[usize]) -> Vec<u8>;
+    fn alltoallv_bytes(&self, send: &[u8], send_counts: &[usize], recv_counts: &[usize])
+        -> Vec<u8>;
     /// Broadcast a byte buffer from `root`; on other ranks the buffer is replaced.
     fn broadcast_bytes(&self, root: usize, bytes: &mut Vec<u8>);
     /// The raw MPI communicator, for MPI-IO; `None` for a serial run.

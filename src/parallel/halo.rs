@@ -35,7 +35,12 @@ impl HaloPlan {
         let wanted = comm.alltoallv_u64(&req, &recv_counts, &send_counts);
         let start = layout.start();
         let send_idx = wanted.iter().map(|&g| g as usize - start).collect();
-        Self { ghosts, recv_counts, send_idx, send_counts }
+        Self {
+            ghosts,
+            recv_counts,
+            send_idx,
+            send_counts,
+        }
     }
 
     pub fn n_ghosts(&self) -> usize {

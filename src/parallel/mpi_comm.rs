@@ -73,19 +73,23 @@ impl Comm for MpiComm {
     }
     fn allreduce_sum(&self, v: &mut [f64]) {
         let send = v.to_vec();
-        self.world.all_reduce_into(&send[..], v, SystemOperation::sum());
+        self.world
+            .all_reduce_into(&send[..], v, SystemOperation::sum());
     }
     fn allreduce_max(&self, v: &mut [f64]) {
         let send = v.to_vec();
-        self.world.all_reduce_into(&send[..], v, SystemOperation::max());
+        self.world
+            .all_reduce_into(&send[..], v, SystemOperation::max());
     }
     fn allreduce_sum_u64(&self, v: &mut [u64]) {
         let send = v.to_vec();
-        self.world.all_reduce_into(&send[..], v, SystemOperation::sum());
+        self.world
+            .all_reduce_into(&send[..], v, SystemOperation::sum());
     }
     fn allreduce_max_u64(&self, v: &mut [u64]) {
         let send = v.to_vec();
-        self.world.all_reduce_into(&send[..], v, SystemOperation::max());
+        self.world
+            .all_reduce_into(&send[..], v, SystemOperation::max());
     }
     fn alltoall_counts(&self, send_counts: &[usize]) -> Vec<usize> {
         let send: Vec<u64> = send_counts.iter().map(|&c| c as u64).collect();
