@@ -9,6 +9,8 @@ pub mod block_jacobi;
 pub mod gmres;
 pub mod matrix;
 
+pub use block_jacobi::BlockJacobi;
+
 pub use matrix::DistMatrix;
 
 use crate::parallel::Comm;
