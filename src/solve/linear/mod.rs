@@ -10,6 +10,7 @@ pub mod gmres;
 pub mod matrix;
 
 pub use block_jacobi::BlockJacobi;
+pub use gmres::{gmres, GmresOptions, GmresStats};
 
 pub use matrix::DistMatrix;
 
