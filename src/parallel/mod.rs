@@ -7,8 +7,10 @@ pub mod comm;
 pub mod halo;
 pub mod layout;
 pub mod mpi_comm;
+pub mod thread_comm;
 
 pub use comm::{Comm, SerialComm};
 pub use halo::HaloPlan;
 pub use layout::Layout;
 pub use mpi_comm::MpiComm;
+pub use thread_comm::{run_ranks, ThreadComm};
