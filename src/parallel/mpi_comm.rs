@@ -61,6 +61,21 @@ impl MpiComm {
     }
 }
 
+/// Bytes as little-endian u64 words, zero-padded.
+fn pack(b: &[u8]) -> Vec<u64> {
+    b.chunks(8)
+        .map(|c| {
+            let mut w = [0u8; 8];
+            w[..c.len()].copy_from_slice(c);
+            u64::from_le_bytes(w)
+        })
+        .collect()
+}
+
+fn unpack(w: &[u64]) -> Vec<u8> {
+    w.iter().flat_map(|x| x.to_le_bytes()).collect()
+}
+
 impl Comm for MpiComm {
     fn rank(&self) -> usize {
         self.world.rank() as usize
@@ -104,17 +119,39 @@ impl Comm for MpiComm {
         self.alltoallv(send, s, r)
     }
     fn alltoallv_bytes(&self, send: &[u8], s: &[usize], r: &[usize]) -> Vec<u8> {
-        self.alltoallv(send, s, r)
+        // Shipped as u64 words: MPI_Alltoallv with rsmpi's u8 (MPI_UINT8_T) datatype
+        // truncates/corrupts messages under Debian's Open MPI 4.1.4 (examples/comm_check).
+        let words = |c: usize| c.div_ceil(8);
+        let ws: Vec<usize> = s.iter().map(|&c| words(c)).collect();
+        let wr: Vec<usize> = r.iter().map(|&c| words(c)).collect();
+        let mut packed = Vec::with_capacity(ws.iter().sum());
+        let mut off = 0;
+        for &c in s {
+            packed.extend(pack(&send[off..off + c]));
+            off += c;
+        }
+        let got = self.alltoallv(&packed, &ws, &wr);
+        let mut out = Vec::with_capacity(r.iter().sum());
+        let mut woff = 0;
+        for (&c, &w) in r.iter().zip(&wr) {
+            out.extend_from_slice(&unpack(&got[woff..woff + w])[..c]);
+            woff += w;
+        }
+        out
     }
     fn broadcast_bytes(&self, root: usize, bytes: &mut Vec<u8>) {
         let root_proc = self.world.process_at_rank(root as i32);
         let mut len = [bytes.len() as u64];
         root_proc.broadcast_into(&mut len[..]);
-        if self.rank() != root {
-            bytes.resize(len[0] as usize, 0);
+        let n = len[0] as usize;
+        if n == 0 {
+            bytes.clear();
+            return;
         }
-        if len[0] > 0 {
-            root_proc.broadcast_into(&mut bytes[..]);
+        let mut words = if self.rank() == root { pack(bytes) } else { vec![0u64; n.div_ceil(8)] };
+        root_proc.broadcast_into(&mut words[..]);
+        if self.rank() != root {
+            *bytes = unpack(&words)[..n].to_vec();
         }
     }
     fn raw_mpi(&self) -> Option<mpi::ffi::MPI_Comm> {
