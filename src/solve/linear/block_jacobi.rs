@@ -311,4 +311,228 @@ mod tests {
         let mut bj = BlockJacobi::new(&m1).unwrap();
         assert!(bj.refactor(&m2).is_err());
     }
+
+    /// Stiffness of a trilinear hex8 cube of side `h` (isotropic linear elasticity,
+    /// 2×2×2 Gauss), nodes in the usual order (bottom face counter-clockwise, then top).
+    pub(crate) fn hex8_stiffness(h: f64, e: f64, nu: f64) -> Vec<f64> {
+        let lam = e * nu / ((1.0 + nu) * (1.0 - 2.0 * nu));
+        let mu = e / (2.0 * (1.0 + nu));
+        let corners = [
+            [-1.0, -1.0, -1.0],
+            [1.0, -1.0, -1.0],
+            [1.0, 1.0, -1.0],
+            [-1.0, 1.0, -1.0],
+            [-1.0, -1.0, 1.0],
+            [1.0, -1.0, 1.0],
+            [1.0, 1.0, 1.0],
+            [-1.0, 1.0, 1.0],
+        ];
+        let gp = 1.0 / 3f64.sqrt();
+        let det = (h / 2.0).powi(3);
+        let mut ke = vec![0.0; 24 * 24];
+        for q in &corners {
+            let x = [q[0] * gp, q[1] * gp, q[2] * gp];
+            let grad: Vec<[f64; 3]> = corners
+                .iter()
+                .map(|c| {
+                    let f = [
+                        (1.0 + c[0] * x[0]),
+                        (1.0 + c[1] * x[1]),
+                        (1.0 + c[2] * x[2]),
+                    ];
+                    let s = 2.0 / h / 8.0;
+                    [
+                        s * c[0] * f[1] * f[2],
+                        s * c[1] * f[0] * f[2],
+                        s * c[2] * f[0] * f[1],
+                    ]
+                })
+                .collect();
+            for a in 0..8 {
+                for b in 0..8 {
+                    let gg: f64 = (0..3).map(|k| grad[a][k] * grad[b][k]).sum();
+                    for i in 0..3 {
+                        for j in 0..3 {
+                            let mut v =
+                                lam * grad[a][i] * grad[b][j] + mu * grad[a][j] * grad[b][i];
+                            if i == j {
+                                v += mu * gg;
+                            }
+                            ke[(3 * a + i) * 24 + 3 * b + j] += v * det;
+                        }
+                    }
+                }
+            }
+        }
+        ke
+    }
+
+    /// A cube of `ne³` hex8 elasticity elements, clamped on z = 0, rows split by `counts`
+    /// (node blocks, numbered x fastest). Elements are assembled by the owner of their
+    /// first node.
+    pub(crate) fn elasticity_cube(comm: &dyn Comm, ne: usize, counts: &[usize]) -> DistMatrix {
+        let nn = ne + 1;
+        let id = |i: usize, j: usize, k: usize| i + nn * (j + nn * k);
+        let layout = Layout::from_counts(counts, comm.rank());
+        let mut els = Vec::new();
+        for k in 0..ne {
+            for j in 0..ne {
+                for i in 0..ne {
+                    let el = [
+                        id(i, j, k),
+                        id(i + 1, j, k),
+                        id(i + 1, j + 1, k),
+                        id(i, j + 1, k),
+                        id(i, j, k + 1),
+                        id(i + 1, j, k + 1),
+                        id(i + 1, j + 1, k + 1),
+                        id(i, j + 1, k + 1),
+                    ];
+                    if layout.owner(el[0]) == comm.rank() {
+                        els.push(el);
+                    }
+                }
+            }
+        }
+        let pairs: Vec<(usize, usize)> = els
+            .iter()
+            .flat_map(|el| el.iter().flat_map(|&a| el.iter().map(move |&b| (a, b))))
+            .collect();
+        let mut m = DistMatrix::new(comm, layout.clone(), &pairs);
+        let ke = hex8_stiffness(1.0 / ne as f64, 1.0, 0.3);
+        for el in &els {
+            m.add_element(el, &ke);
+        }
+        m.finish_assembly(comm);
+        let s = layout.start();
+        let clamped: Vec<usize> = (s..layout.end().min(nn * nn).max(s))
+            .flat_map(|g| (0..3).map(move |c| 3 * (g - s) + c))
+            .collect();
+        m.constrain(comm, &clamped);
+        m
+    }
+
+    #[test]
+    fn hex8_stiffness_has_rigid_body_null_space() {
+        let ke = hex8_stiffness(0.5, 200.0, 0.3);
+        for dir in 0..3 {
+            let u: Vec<f64> = (0..24)
+                .map(|k| if k % 3 == dir { 1.0 } else { 0.0 })
+                .collect();
+            for r in 0..24 {
+                let f: f64 = (0..24).map(|c| ke[r * 24 + c] * u[c]).sum();
+                assert!(f.abs() < 1e-10, "translation {dir} row {r}: {f}");
+            }
+        }
+        for r in 0..24 {
+            for c in 0..24 {
+                assert!((ke[r * 24 + c] - ke[c * 24 + r]).abs() < 1e-10);
+            }
+        }
+    }
+
+    /// Timing of faer's LU (COLAMD) on a ~100k-unknown elasticity block, and block
+    /// Jacobi GMRES on 2 thread ranks. Run with
+    /// `cargo test --release --lib timing_elasticity_100k -- --ignored --nocapture`.
+    #[test]
+    #[ignore]
+    fn timing_elasticity_100k() {
+        use crate::parallel::run_ranks;
+        use crate::solve::linear::{gmres, GmresOptions};
+        faer::set_global_parallelism(faer::Par::Seq);
+        let ne = 31; // 32³ nodes = 98304 unknowns
+        let n_blocks = (ne + 1) * (ne + 1) * (ne + 1);
+        let t = Instant::now();
+        let mut m = elasticity_cube(&SerialComm, ne, &[n_blocks]);
+        let t_asm = t.elapsed().as_secs_f64();
+        let t = Instant::now();
+        let mut bj = BlockJacobi::new(&m).unwrap();
+        let t_first = t.elapsed().as_secs_f64();
+        let t = Instant::now();
+        bj.refactor(&m).unwrap();
+        let t_refactor = t.elapsed().as_secs_f64();
+        let b: Vec<f64> = (0..m.n_owned_dofs())
+            .map(|i| if i % 3 == 2 { -1.0 } else { 0.1 })
+            .collect();
+        let mut z = vec![0.0; b.len()];
+        let t = Instant::now();
+        bj.apply(&b, &mut z);
+        let t_solve = t.elapsed().as_secs_f64();
+        let mut x = vec![0.0; b.len()];
+        let st = gmres(
+            &SerialComm,
+            &mut m,
+            &bj,
+            &b,
+            &mut x,
+            &GmresOptions::default(),
+        )
+        .unwrap();
+        eprintln!(
+            "1 rank: n = {}, nnz = {}; assembly {t_asm:.2} s; symbolic {:.2} s; first numeric {:.2} s \
+             (new total {t_first:.2} s); refactor {t_refactor:.2} s; one solve {t_solve:.3} s; \
+             GMRES {} it",
+            bj.n(),
+            bj.nnz(),
+            bj.symbolic_seconds(),
+            t_first - bj.symbolic_seconds(),
+            st.iterations
+        );
+        assert!(st.converged && st.iterations == 1);
+
+        // For comparison: sparse Cholesky (AMD ordering) of the same SPD block.
+        {
+            use faer::sparse::linalg::solvers::{Llt, SymbolicLlt};
+            let t = Instant::now();
+            let sym = SymbolicLlt::try_new(bj.pattern.as_ref(), faer::Side::Lower).unwrap();
+            let t_sym = t.elapsed().as_secs_f64();
+            let t = Instant::now();
+            let a = SparseColMatRef::new(bj.pattern.as_ref(), &bj.csc_vals);
+            let llt = Llt::try_new_with_symbolic(sym, a, faer::Side::Lower).unwrap();
+            let t_num = t.elapsed().as_secs_f64();
+            let mut z2 = b.clone();
+            let t = Instant::now();
+            llt.solve_in_place(faer::ColMut::from_slice_mut(&mut z2));
+            let t_sol = t.elapsed().as_secs_f64();
+            let diff = z
+                .iter()
+                .zip(&z2)
+                .map(|(a, b)| (a - b).abs())
+                .fold(0.0, f64::max);
+            eprintln!(
+                "1 rank Cholesky (AMD) for comparison: symbolic {t_sym:.2} s, numeric {t_num:.2} s, \
+                 solve {t_sol:.3} s, max |z_lu - z_llt| = {diff:.1e}"
+            );
+        }
+
+        for p in [2usize, 4] {
+            let counts: Vec<usize> = (0..p)
+                .map(|r| n_blocks * (r + 1) / p - n_blocks * r / p)
+                .collect();
+            let out = run_ranks(p, |c| {
+                let mut m = elasticity_cube(c, ne, &counts);
+                let t = Instant::now();
+                let bj = BlockJacobi::new(&m).unwrap();
+                let t_fac = t.elapsed().as_secs_f64();
+                let b: Vec<f64> = (0..m.n_owned_dofs())
+                    .map(|i| if i % 3 == 2 { -1.0 } else { 0.1 })
+                    .collect();
+                let mut x = vec![0.0; b.len()];
+                let t = Instant::now();
+                let st = gmres(c, &mut m, &bj, &b, &mut x, &GmresOptions::default()).unwrap();
+                (t_fac, t.elapsed().as_secs_f64(), st)
+            });
+            let (_, t_gm, st) = &out[0];
+            let facs: Vec<String> = out.iter().map(|o| format!("{:.2}", o.0)).collect();
+            eprintln!(
+                "{p} thread ranks (on 2 cores): factor per rank [{}] s; GMRES {} it, {:.2} s, \
+                 converged {}, {} reductions",
+                facs.join(", "),
+                st.iterations,
+                t_gm,
+                st.converged,
+                st.reductions
+            );
+        }
+    }
 }

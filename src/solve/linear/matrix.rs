@@ -513,11 +513,10 @@ pub(crate) mod tests {
     fn assemble_and_check(prob: &Problem, p: usize, constrained: &[usize]) {
         let dense = {
             let mut a = prob.dense();
-            let n = a.len();
             for &d in constrained {
-                for k in 0..n {
-                    a[d][k] = 0.0;
-                    a[k][d] = 0.0;
+                a[d].fill(0.0);
+                for row in a.iter_mut() {
+                    row[d] = 0.0;
                 }
                 a[d][d] = 1.0;
             }
