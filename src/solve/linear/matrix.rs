@@ -315,6 +315,11 @@ impl DistMatrix {
         3 * self.layout.global_len()
     }
 
+    /// Global block columns of owned block row `local_row` (sorted).
+    pub fn cols_of_row(&self, local_row: usize) -> &[usize] {
+        &self.cols[self.row_ptr[local_row]..self.row_ptr[local_row + 1]]
+    }
+
     /// Ghost block columns (sorted global block indices).
     pub fn ghost_blocks(&self) -> &[usize] {
         &self.ghost_blocks
