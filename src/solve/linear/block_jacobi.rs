@@ -610,6 +610,19 @@ mod tests {
         let t = Instant::now();
         let mut m = elasticity_cube(&SerialComm, ne, &[n_blocks]);
         let t_asm = t.elapsed().as_secs_f64();
+        {
+            let x: Vec<f64> = (0..m.n_owned_dofs()).map(|i| (i as f64).sin()).collect();
+            let mut y = vec![0.0; x.len()];
+            let t = Instant::now();
+            for _ in 0..20 {
+                m.spmv(&SerialComm, &x, &mut y);
+            }
+            eprintln!(
+                "1 rank spmv: {:.2} ms ({} scalar nonzeros)",
+                t.elapsed().as_secs_f64() / 20.0 * 1e3,
+                m.nnz_local()
+            );
+        }
         let t = Instant::now();
         let mut bj = BlockJacobi::with_factorization(&m, Factorization::Lu).unwrap();
         let t_first = t.elapsed().as_secs_f64();
@@ -685,11 +698,13 @@ mod tests {
             let (_, t_gm, st) = &out[0];
             let facs: Vec<String> = out.iter().map(|o| format!("{:.2}", o.0)).collect();
             eprintln!(
-                "{p} thread ranks (on 2 cores): factor per rank [{}] s; GMRES {} it, {:.2} s, \
-                 converged {}, {} reductions",
+                "{p} thread ranks (on 2 cores): factor per rank [{}] s; GMRES {} it, {:.2} s \
+                 (rank 0: operator {:.2} s, preconditioner {:.2} s), converged {}, {} reductions",
                 facs.join(", "),
                 st.iterations,
                 t_gm,
+                st.seconds_in_operator,
+                st.seconds_in_preconditioner,
                 st.converged,
                 st.reductions
             );
