@@ -1,10 +1,23 @@
 //! Block-Jacobi preconditioner: this rank's diagonal block (owned rows × owned columns,
-//! scalar) factored exactly with faer's sparse LU (COLAMD ordering, partial pivoting).
+//! scalar) factored exactly with faer's sparse direct solvers.
 //!
-//! The symbolic factorization (ordering, elimination structure) is computed once in
-//! [`BlockJacobi::new`]; [`BlockJacobi::refactor`] copies the new values of the same
-//! pattern through a precomputed gather map into the CSC value array and refactors
-//! numerically only. The preconditioner is local: applying it needs no communication.
+//! Two factorizations:
+//! * **LU** (COLAMD column ordering, partial pivoting): any nonsingular block, including
+//!   non-symmetric ones (friction) and saddle points (contact multiplier rows).
+//! * **Cholesky** LLᵀ (AMD ordering): symmetric positive definite blocks (a stiffness
+//!   with Dirichlet rows). On a 3D hex8 elasticity block of ~100k unknowns it is about
+//!   3.5× faster than the LU (COLAMD orders for the pattern of AᵀA, which fills badly
+//!   on 3D meshes).
+//!
+//! [`Factorization::Auto`] (the default) uses Cholesky while the block is numerically
+//! symmetric and the factorization succeeds, and otherwise switches to LU for good
+//! (it never retries Cholesky after a failure, so an indefinite block costs one failed
+//! attempt, not one per refactorization).
+//!
+//! The symbolic factorization (ordering, elimination structure) is computed once per
+//! kind; [`BlockJacobi::refactor`] copies the new values of the same pattern through a
+//! precomputed gather map into the CSC value array and refactors numerically only. The
+//! preconditioner is local: applying it needs no communication.
 //!
 //! faer's numeric LU does not report an exactly zero pivot (it divides by it), so after
 //! each factorization a check solve `A z = A·1` is run: a non-finite or far-off `z`
@@ -14,21 +27,46 @@
 use super::{DistMatrix, Preconditioner};
 use crate::Error;
 use faer::linalg::solvers::Solve;
-use faer::sparse::linalg::solvers::{Lu as SparseLu, SymbolicLu};
-use faer::sparse::linalg::LuError;
+use faer::sparse::linalg::solvers::{Llt, Lu as SparseLu, SymbolicLlt, SymbolicLu};
+use faer::sparse::linalg::{LltError, LuError};
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMat};
+use faer::Side;
 use std::time::Instant;
+
+/// Which sparse factorization block Jacobi uses.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Factorization {
+    /// Cholesky while the block is symmetric positive definite, else LU.
+    #[default]
+    Auto,
+    /// Always LU.
+    Lu,
+    /// Always Cholesky; a block that is not SPD is an error.
+    Cholesky,
+}
+
+enum Factor {
+    None,
+    Lu(Box<SparseLu<usize, f64>>),
+    Llt(Llt<usize, f64>),
+}
 
 pub struct BlockJacobi {
     n: usize,
+    choice: Factorization,
+    /// In `Auto` mode, set once Cholesky failed or the block was non-symmetric.
+    cholesky_ruled_out: bool,
     /// Pattern of the diagonal block (scalar CSC, sorted row indices).
     pattern: SymbolicSparseColMat<usize>,
     /// For each CSC position, the index into the matrix's block value array.
     src: Vec<usize>,
+    /// For each CSC position (i, j), the position of (j, i), or `usize::MAX`.
+    transpose_pos: Vec<usize>,
     csc_vals: Vec<f64>,
     nnz_blocks: usize,
-    symbolic: Option<SymbolicLu<usize>>,
-    lu: Option<SparseLu<usize, f64>>,
+    symbolic_lu: Option<SymbolicLu<usize>>,
+    symbolic_llt: Option<SymbolicLlt<usize>>,
+    factor: Factor,
     factorizations: usize,
     symbolic_factorizations: usize,
     symbolic_seconds: f64,
@@ -40,14 +78,20 @@ impl std::fmt::Debug for BlockJacobi {
         f.debug_struct("BlockJacobi")
             .field("n", &self.n)
             .field("nnz", &self.src.len())
+            .field("kind", &self.kind())
             .field("factorizations", &self.factorizations)
             .finish()
     }
 }
 
 impl BlockJacobi {
-    /// Symbolic and numeric factorization of `mat`'s local diagonal block.
+    /// Factor `mat`'s local diagonal block ([`Factorization::Auto`]).
     pub fn new(mat: &DistMatrix) -> crate::Result<Self> {
+        Self::with_factorization(mat, Factorization::Auto)
+    }
+
+    /// Factor `mat`'s local diagonal block with the given kind of factorization.
+    pub fn with_factorization(mat: &DistMatrix, choice: Factorization) -> crate::Result<Self> {
         let n_own = mat.layout().owned_len();
         let n = 3 * n_own;
         // Column counts: every diagonal-part block entry in block column k puts 3 entries
@@ -82,31 +126,36 @@ impl BlockJacobi {
                 }
             }
         }
+        let transpose_pos: Vec<usize> = (0..n)
+            .flat_map(|j| {
+                let (cp, ri) = (&col_ptr, &row_idx);
+                (cp[j]..cp[j + 1]).map(move |p| {
+                    let i = ri[p];
+                    match ri[cp[i]..cp[i + 1]].binary_search(&j) {
+                        Ok(q) => cp[i] + q,
+                        Err(_) => usize::MAX,
+                    }
+                })
+            })
+            .collect();
         let pattern = SymbolicSparseColMat::new_checked(n, n, col_ptr, None, row_idx);
         let mut bj = Self {
             n,
+            choice,
+            cholesky_ruled_out: false,
             pattern,
             src,
+            transpose_pos,
             csc_vals: vec![0.0; nnz],
             nnz_blocks: mat.nnz_blocks_local(),
-            symbolic: None,
-            lu: None,
+            symbolic_lu: None,
+            symbolic_llt: None,
+            factor: Factor::None,
             factorizations: 0,
             symbolic_factorizations: 0,
             symbolic_seconds: 0.0,
             last_factor_seconds: 0.0,
         };
-        if n > 0 {
-            let t = Instant::now();
-            let sym = SymbolicLu::try_new(bj.pattern.as_ref()).map_err(|e| {
-                Error::runtime(format!(
-                    "block Jacobi: symbolic LU of the local {n}×{n} block failed: {e:?}"
-                ))
-            })?;
-            bj.symbolic = Some(sym);
-            bj.symbolic_factorizations += 1;
-            bj.symbolic_seconds = t.elapsed().as_secs_f64();
-        }
         bj.refactor(mat)?;
         Ok(bj)
     }
@@ -124,7 +173,7 @@ impl BlockJacobi {
             )));
         }
         let t = Instant::now();
-        self.lu = None;
+        self.factor = Factor::None;
         if self.n == 0 {
             self.factorizations += 1;
             self.last_factor_seconds = 0.0;
@@ -133,11 +182,81 @@ impl BlockJacobi {
         for (v, &s) in self.csc_vals.iter_mut().zip(&self.src) {
             *v = mat.vals[s];
         }
+        let try_cholesky = match self.choice {
+            Factorization::Lu => false,
+            Factorization::Cholesky => true,
+            Factorization::Auto => {
+                if !self.cholesky_ruled_out && !self.is_symmetric() {
+                    self.cholesky_ruled_out = true;
+                }
+                !self.cholesky_ruled_out
+            }
+        };
+        if try_cholesky {
+            match self.factor_cholesky() {
+                Ok(()) => {}
+                Err(e) if self.choice == Factorization::Cholesky => return Err(e),
+                Err(_) => {
+                    self.cholesky_ruled_out = true;
+                    self.factor_lu()?;
+                }
+            }
+        } else {
+            self.factor_lu()?;
+        }
+        self.check_nonsingular()?;
+        self.factorizations += 1;
+        self.last_factor_seconds = t.elapsed().as_secs_f64();
+        Ok(())
+    }
+
+    /// Numerically symmetric within round-off (entries with no transpose must be zero).
+    fn is_symmetric(&self) -> bool {
+        let scale = self.csc_vals.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        let v = &self.csc_vals;
+        self.transpose_pos.iter().enumerate().all(|(p, &q)| {
+            let t = if q == usize::MAX { 0.0 } else { v[q] };
+            (v[p] - t).abs() <= 1e-10 * v[p].abs().max(t.abs()) + 1e-14 * scale
+        })
+    }
+
+    fn factor_cholesky(&mut self) -> crate::Result<()> {
+        if self.symbolic_llt.is_none() {
+            let t = Instant::now();
+            let sym = SymbolicLlt::try_new(self.pattern.as_ref(), Side::Lower).map_err(|e| {
+                Error::runtime(format!("block Jacobi: symbolic Cholesky failed: {e:?}"))
+            })?;
+            self.symbolic_llt = Some(sym);
+            self.symbolic_factorizations += 1;
+            self.symbolic_seconds += t.elapsed().as_secs_f64();
+        }
         let a = SparseColMatRef::new(self.pattern.as_ref(), &self.csc_vals);
         let sym = self
-            .symbolic
+            .symbolic_llt
             .clone()
-            .expect("symbolic factorization present");
+            .expect("symbolic Cholesky present");
+        let llt = Llt::try_new_with_symbolic(sym, a, Side::Lower).map_err(|e| match e {
+            LltError::Numeric(_) => Error::runtime(format!(
+                "block Jacobi: the local {}×{} diagonal block is not positive definite",
+                self.n, self.n
+            )),
+            LltError::Generic(g) => Error::runtime(format!("block Jacobi: Cholesky failed: {g:?}")),
+        })?;
+        self.factor = Factor::Llt(llt);
+        Ok(())
+    }
+
+    fn factor_lu(&mut self) -> crate::Result<()> {
+        if self.symbolic_lu.is_none() {
+            let t = Instant::now();
+            let sym = SymbolicLu::try_new(self.pattern.as_ref())
+                .map_err(|e| Error::runtime(format!("block Jacobi: symbolic LU failed: {e:?}")))?;
+            self.symbolic_lu = Some(sym);
+            self.symbolic_factorizations += 1;
+            self.symbolic_seconds += t.elapsed().as_secs_f64();
+        }
+        let a = SparseColMatRef::new(self.pattern.as_ref(), &self.csc_vals);
+        let sym = self.symbolic_lu.clone().expect("symbolic LU present");
         let lu = SparseLu::try_new_with_symbolic(sym, a).map_err(|e| match e {
             LuError::SymbolicSingular { index } => Error::runtime(format!(
                 "block Jacobi: the local {}×{} diagonal block is singular (no pivot at step \
@@ -146,29 +265,30 @@ impl BlockJacobi {
             )),
             LuError::Generic(g) => Error::runtime(format!("block Jacobi: sparse LU failed: {g:?}")),
         })?;
-        self.check_nonsingular(&lu, a)?;
-        self.lu = Some(lu);
-        self.factorizations += 1;
-        self.last_factor_seconds = t.elapsed().as_secs_f64();
+        self.factor = Factor::Lu(Box::new(lu));
         Ok(())
+    }
+
+    fn solve_in_place(&self, z: &mut [f64]) {
+        let col = faer::ColMut::from_slice_mut(z);
+        match &self.factor {
+            Factor::None => {}
+            Factor::Lu(lu) => lu.solve_in_place(col),
+            Factor::Llt(llt) => llt.solve_in_place(col),
+        }
     }
 
     /// Solve A z = A·1 and require z ≈ 1: catches zero pivots (inf/NaN) and blocks that
     /// are singular to working precision (error ≥ 1 means cond ≳ 1/ε).
-    fn check_nonsingular(
-        &self,
-        lu: &SparseLu<usize, f64>,
-        a: SparseColMatRef<'_, usize, f64>,
-    ) -> crate::Result<()> {
+    fn check_nonsingular(&mut self) -> crate::Result<()> {
         let mut z = vec![0.0; self.n];
-        let (sym, vals) = a.parts();
-        let (cp, ri) = (sym.col_ptr(), sym.row_idx());
+        let (cp, ri) = (self.pattern.col_ptr(), self.pattern.row_idx());
         for j in 0..self.n {
             for p in cp[j]..cp[j + 1] {
-                z[ri[p]] += vals[p];
+                z[ri[p]] += self.csc_vals[p];
             }
         }
-        lu.solve_in_place(faer::ColMut::from_slice_mut(&mut z));
+        self.solve_in_place(&mut z);
         let err = z.iter().map(|v| (v - 1.0).abs()).fold(0.0f64, |m, e| {
             if e.is_nan() {
                 f64::INFINITY
@@ -177,6 +297,7 @@ impl BlockJacobi {
             }
         });
         if !err.is_finite() || err > 1.0 {
+            self.factor = Factor::None;
             return Err(Error::runtime(format!(
                 "block Jacobi: the local {}×{} diagonal block is numerically singular (check \
                  solve error {err:.3e}); check constraints and contact multiplier rows",
@@ -186,6 +307,15 @@ impl BlockJacobi {
         Ok(())
     }
 
+    /// The factorization in use: `Lu` or `Cholesky` (`Auto` only before any
+    /// factorization or for an empty block).
+    pub fn kind(&self) -> Factorization {
+        match self.factor {
+            Factor::None => Factorization::Auto,
+            Factor::Lu(_) => Factorization::Lu,
+            Factor::Llt(_) => Factorization::Cholesky,
+        }
+    }
     /// Size of the factored block (owned scalar dofs).
     pub fn n(&self) -> usize {
         self.n
@@ -198,15 +328,16 @@ impl BlockJacobi {
     pub fn factorizations(&self) -> usize {
         self.factorizations
     }
-    /// Symbolic factorizations done (1 unless the block is empty).
+    /// Symbolic factorizations done (one per kind used; 0 for an empty block).
     pub fn symbolic_factorizations(&self) -> usize {
         self.symbolic_factorizations
     }
-    /// Wall time of the symbolic factorization (ordering and structure).
+    /// Wall time of the symbolic factorizations (ordering and structure).
     pub fn symbolic_seconds(&self) -> f64 {
         self.symbolic_seconds
     }
-    /// Wall time of the last numeric factorization (value gather, LU, check solve).
+    /// Wall time of the last numeric factorization (value gather, factorization, check
+    /// solve; on the first call also the symbolic factorization).
     pub fn last_factor_seconds(&self) -> f64 {
         self.last_factor_seconds
     }
@@ -215,9 +346,7 @@ impl BlockJacobi {
 impl Preconditioner for BlockJacobi {
     fn apply(&self, r: &[f64], z: &mut [f64]) {
         z.copy_from_slice(r);
-        if let Some(lu) = &self.lu {
-            lu.solve_in_place(faer::ColMut::from_slice_mut(z));
-        }
+        self.solve_in_place(z);
     }
 }
 
@@ -280,7 +409,43 @@ mod tests {
         assert!(residual(&m2, &z, &r) < 1e-13);
         assert_eq!(bj.factorizations(), 2);
         assert_eq!(bj.symbolic_factorizations(), 1);
+        assert_eq!(bj.kind(), Factorization::Lu);
         assert!(bj.last_factor_seconds() > 0.0);
+    }
+
+    #[test]
+    fn auto_uses_cholesky_while_spd_and_switches_to_lu() {
+        let mut m = elasticity_cube(&SerialComm, 3, &[64]);
+        let r: Vec<f64> = (0..192).map(|i| (i as f64 * 0.37).cos()).collect();
+        let mut z = vec![0.0; 192];
+        let mut bj = BlockJacobi::new(&m).unwrap();
+        assert_eq!(bj.kind(), Factorization::Cholesky);
+        bj.apply(&r, &mut z);
+        assert!(residual(&m, &z, &r) < 1e-12);
+
+        // Symmetric but indefinite (one diagonal entry flipped): Cholesky fails, LU works.
+        let e = m.row_ptr[40] + m.cols_of_row(40).binary_search(&40).unwrap();
+        m.vals[9 * e] = -m.vals[9 * e];
+        bj.refactor(&m).unwrap();
+        assert_eq!(bj.kind(), Factorization::Lu);
+        bj.apply(&r, &mut z);
+        assert!(residual(&m, &z, &r) < 1e-12);
+        assert!(BlockJacobi::with_factorization(&m, Factorization::Cholesky).is_err());
+
+        // Back to SPD: Auto stays with LU (no retry after a failure).
+        m.vals[9 * e] = -m.vals[9 * e];
+        bj.refactor(&m).unwrap();
+        assert_eq!(bj.kind(), Factorization::Lu);
+        assert_eq!(bj.symbolic_factorizations(), 2);
+        assert_eq!(bj.factorizations(), 3);
+
+        // Non-symmetric values from the start: LU directly, one symbolic factorization.
+        m.vals[9 * e + 1] += 0.5;
+        let bj = BlockJacobi::new(&m).unwrap();
+        assert_eq!(bj.kind(), Factorization::Lu);
+        assert_eq!(bj.symbolic_factorizations(), 1);
+        bj.apply(&r, &mut z);
+        assert!(residual(&m, &z, &r) < 1e-12);
     }
 
     #[test]
@@ -310,5 +475,239 @@ mod tests {
         let m2 = tridiag(11, 1, 6.0);
         let mut bj = BlockJacobi::new(&m1).unwrap();
         assert!(bj.refactor(&m2).is_err());
+    }
+
+    /// Stiffness of a trilinear hex8 cube of side `h` (isotropic linear elasticity,
+    /// 2×2×2 Gauss), nodes in the usual order (bottom face counter-clockwise, then top).
+    pub(crate) fn hex8_stiffness(h: f64, e: f64, nu: f64) -> Vec<f64> {
+        let lam = e * nu / ((1.0 + nu) * (1.0 - 2.0 * nu));
+        let mu = e / (2.0 * (1.0 + nu));
+        let corners = [
+            [-1.0, -1.0, -1.0],
+            [1.0, -1.0, -1.0],
+            [1.0, 1.0, -1.0],
+            [-1.0, 1.0, -1.0],
+            [-1.0, -1.0, 1.0],
+            [1.0, -1.0, 1.0],
+            [1.0, 1.0, 1.0],
+            [-1.0, 1.0, 1.0],
+        ];
+        let gp = 1.0 / 3f64.sqrt();
+        let det = (h / 2.0).powi(3);
+        let mut ke = vec![0.0; 24 * 24];
+        for q in &corners {
+            let x = [q[0] * gp, q[1] * gp, q[2] * gp];
+            let grad: Vec<[f64; 3]> = corners
+                .iter()
+                .map(|c| {
+                    let f = [
+                        (1.0 + c[0] * x[0]),
+                        (1.0 + c[1] * x[1]),
+                        (1.0 + c[2] * x[2]),
+                    ];
+                    let s = 2.0 / h / 8.0;
+                    [
+                        s * c[0] * f[1] * f[2],
+                        s * c[1] * f[0] * f[2],
+                        s * c[2] * f[0] * f[1],
+                    ]
+                })
+                .collect();
+            for a in 0..8 {
+                for b in 0..8 {
+                    let gg: f64 = (0..3).map(|k| grad[a][k] * grad[b][k]).sum();
+                    for i in 0..3 {
+                        for j in 0..3 {
+                            let mut v =
+                                lam * grad[a][i] * grad[b][j] + mu * grad[a][j] * grad[b][i];
+                            if i == j {
+                                v += mu * gg;
+                            }
+                            ke[(3 * a + i) * 24 + 3 * b + j] += v * det;
+                        }
+                    }
+                }
+            }
+        }
+        ke
+    }
+
+    /// A cube of `ne³` hex8 elasticity elements, clamped on z = 0, rows split by `counts`
+    /// (node blocks, numbered x fastest). Elements are assembled by the owner of their
+    /// first node.
+    pub(crate) fn elasticity_cube(comm: &dyn Comm, ne: usize, counts: &[usize]) -> DistMatrix {
+        let nn = ne + 1;
+        let id = |i: usize, j: usize, k: usize| i + nn * (j + nn * k);
+        let layout = Layout::from_counts(counts, comm.rank());
+        let mut els = Vec::new();
+        for k in 0..ne {
+            for j in 0..ne {
+                for i in 0..ne {
+                    let el = [
+                        id(i, j, k),
+                        id(i + 1, j, k),
+                        id(i + 1, j + 1, k),
+                        id(i, j + 1, k),
+                        id(i, j, k + 1),
+                        id(i + 1, j, k + 1),
+                        id(i + 1, j + 1, k + 1),
+                        id(i, j + 1, k + 1),
+                    ];
+                    if layout.owner(el[0]) == comm.rank() {
+                        els.push(el);
+                    }
+                }
+            }
+        }
+        let pairs: Vec<(usize, usize)> = els
+            .iter()
+            .flat_map(|el| el.iter().flat_map(|&a| el.iter().map(move |&b| (a, b))))
+            .collect();
+        let mut m = DistMatrix::new(comm, layout.clone(), &pairs);
+        let ke = hex8_stiffness(1.0 / ne as f64, 1.0, 0.3);
+        for el in &els {
+            m.add_element(el, &ke);
+        }
+        m.finish_assembly(comm);
+        let s = layout.start();
+        let clamped: Vec<usize> = (s..layout.end().min(nn * nn).max(s))
+            .flat_map(|g| (0..3).map(move |c| 3 * (g - s) + c))
+            .collect();
+        m.constrain(comm, &clamped);
+        m
+    }
+
+    #[test]
+    fn hex8_stiffness_has_rigid_body_null_space() {
+        let ke = hex8_stiffness(0.5, 200.0, 0.3);
+        for dir in 0..3 {
+            let u: Vec<f64> = (0..24)
+                .map(|k| if k % 3 == dir { 1.0 } else { 0.0 })
+                .collect();
+            for r in 0..24 {
+                let f: f64 = (0..24).map(|c| ke[r * 24 + c] * u[c]).sum();
+                assert!(f.abs() < 1e-10, "translation {dir} row {r}: {f}");
+            }
+        }
+        for r in 0..24 {
+            for c in 0..24 {
+                assert!((ke[r * 24 + c] - ke[c * 24 + r]).abs() < 1e-10);
+            }
+        }
+    }
+
+    /// Timing of faer's LU (COLAMD) on a ~100k-unknown elasticity block, and block
+    /// Jacobi GMRES on 2 thread ranks. Run with
+    /// `cargo test --release --lib timing_elasticity_100k -- --ignored --nocapture`.
+    #[test]
+    #[ignore]
+    fn timing_elasticity_100k() {
+        use crate::parallel::run_ranks;
+        use crate::solve::linear::{gmres, GmresOptions};
+        faer::set_global_parallelism(faer::Par::Seq);
+        let ne = 31; // 32³ nodes = 98304 unknowns
+        let n_blocks = (ne + 1) * (ne + 1) * (ne + 1);
+        let t = Instant::now();
+        let mut m = elasticity_cube(&SerialComm, ne, &[n_blocks]);
+        let t_asm = t.elapsed().as_secs_f64();
+        {
+            let x: Vec<f64> = (0..m.n_owned_dofs()).map(|i| (i as f64).sin()).collect();
+            let mut y = vec![0.0; x.len()];
+            let t = Instant::now();
+            for _ in 0..20 {
+                m.spmv(&SerialComm, &x, &mut y);
+            }
+            eprintln!(
+                "1 rank spmv: {:.2} ms ({} scalar nonzeros)",
+                t.elapsed().as_secs_f64() / 20.0 * 1e3,
+                m.nnz_local()
+            );
+        }
+        let t = Instant::now();
+        let mut bj = BlockJacobi::with_factorization(&m, Factorization::Lu).unwrap();
+        let t_first = t.elapsed().as_secs_f64();
+        let t = Instant::now();
+        bj.refactor(&m).unwrap();
+        let t_refactor = t.elapsed().as_secs_f64();
+        let b: Vec<f64> = (0..m.n_owned_dofs())
+            .map(|i| if i % 3 == 2 { -1.0 } else { 0.1 })
+            .collect();
+        let mut z = vec![0.0; b.len()];
+        let t = Instant::now();
+        bj.apply(&b, &mut z);
+        let t_solve = t.elapsed().as_secs_f64();
+        let mut x = vec![0.0; b.len()];
+        let st = gmres(
+            &SerialComm,
+            &mut m,
+            &bj,
+            &b,
+            &mut x,
+            &GmresOptions::default(),
+        )
+        .unwrap();
+        eprintln!(
+            "1 rank LU: n = {}, nnz = {}; assembly {t_asm:.2} s; symbolic {:.2} s; new() total \
+             {t_first:.2} s; refactor {t_refactor:.2} s; one solve {t_solve:.3} s; GMRES {} it",
+            bj.n(),
+            bj.nnz(),
+            bj.symbolic_seconds(),
+            st.iterations
+        );
+        assert!(st.converged && st.iterations == 1);
+
+        let t = Instant::now();
+        let mut bj = BlockJacobi::new(&m).unwrap();
+        let t_first = t.elapsed().as_secs_f64();
+        assert_eq!(bj.kind(), Factorization::Cholesky);
+        let t = Instant::now();
+        bj.refactor(&m).unwrap();
+        let t_refactor = t.elapsed().as_secs_f64();
+        let mut z2 = vec![0.0; b.len()];
+        let t = Instant::now();
+        bj.apply(&b, &mut z2);
+        let t_solve = t.elapsed().as_secs_f64();
+        let diff = z
+            .iter()
+            .zip(&z2)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f64::max);
+        eprintln!(
+            "1 rank Auto (Cholesky, AMD): symbolic {:.2} s; new() total {t_first:.2} s; refactor \
+             {t_refactor:.2} s; one solve {t_solve:.3} s; max |z_lu - z_llt| = {diff:.1e}",
+            bj.symbolic_seconds()
+        );
+
+        for p in [2usize, 4] {
+            let counts: Vec<usize> = (0..p)
+                .map(|r| n_blocks * (r + 1) / p - n_blocks * r / p)
+                .collect();
+            let out = run_ranks(p, |c| {
+                let mut m = elasticity_cube(c, ne, &counts);
+                let t = Instant::now();
+                let bj = BlockJacobi::new(&m).unwrap();
+                let t_fac = t.elapsed().as_secs_f64();
+                let b: Vec<f64> = (0..m.n_owned_dofs())
+                    .map(|i| if i % 3 == 2 { -1.0 } else { 0.1 })
+                    .collect();
+                let mut x = vec![0.0; b.len()];
+                let t = Instant::now();
+                let st = gmres(c, &mut m, &bj, &b, &mut x, &GmresOptions::default()).unwrap();
+                (t_fac, t.elapsed().as_secs_f64(), st)
+            });
+            let (_, t_gm, st) = &out[0];
+            let facs: Vec<String> = out.iter().map(|o| format!("{:.2}", o.0)).collect();
+            eprintln!(
+                "{p} thread ranks (on 2 cores): factor per rank [{}] s; GMRES {} it, {:.2} s \
+                 (rank 0: operator {:.2} s, preconditioner {:.2} s), converged {}, {} reductions",
+                facs.join(", "),
+                st.iterations,
+                t_gm,
+                st.seconds_in_operator,
+                st.seconds_in_preconditioner,
+                st.converged,
+                st.reductions
+            );
+        }
     }
 }

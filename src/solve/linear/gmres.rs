@@ -316,7 +316,7 @@ fn subtract_combination(w: &mut [f64], basis: &[f64], c: &[f64], n: usize) {
 mod tests {
     use super::*;
     use crate::parallel::{run_ranks, Layout, SerialComm};
-    use crate::solve::linear::{BlockJacobi, DistMatrix, Identity};
+    use crate::solve::linear::{BlockJacobi, DistMatrix, Factorization, Identity};
 
     /// 3D grid of `nx·ny·nz` blocks, 7-point stencil: A = L ⊗ K + shift·I, assembled from
     /// 2-node edge elements [[K, −K], [−K, K]] (elements assigned by the owner of the
@@ -414,13 +414,15 @@ mod tests {
     fn one_rank_block_jacobi_is_exact_so_one_iteration() {
         let c = SerialComm;
         let mut m = grid_matrix(&c, DIMS, &counts(1), 0.01, 0.0);
-        let bj = BlockJacobi::new(&m).unwrap();
-        let b = rhs(m.layout());
-        let mut x = vec![0.0; b.len()];
-        let st = gmres(&c, &mut m, &bj, &b, &mut x, &GmresOptions::default()).unwrap();
-        assert!(st.converged, "{st:?}");
-        assert_eq!(st.iterations, 1, "{st:?}");
-        assert!(true_rel_residual(&c, &m, &b, &x) <= 1e-8);
+        for kind in [Factorization::Auto, Factorization::Lu] {
+            let bj = BlockJacobi::with_factorization(&m, kind).unwrap();
+            let b = rhs(m.layout());
+            let mut x = vec![0.0; b.len()];
+            let st = gmres(&c, &mut m, &bj, &b, &mut x, &GmresOptions::default()).unwrap();
+            assert!(st.converged, "{kind:?} {st:?}");
+            assert_eq!(st.iterations, 1, "{kind:?} {st:?}");
+            assert!(true_rel_residual(&c, &m, &b, &x) <= 1e-8);
+        }
     }
 
     #[test]

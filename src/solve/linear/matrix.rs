@@ -315,6 +315,11 @@ impl DistMatrix {
         3 * self.layout.global_len()
     }
 
+    /// Global block columns of owned block row `local_row` (sorted).
+    pub fn cols_of_row(&self, local_row: usize) -> &[usize] {
+        &self.cols[self.row_ptr[local_row]..self.row_ptr[local_row + 1]]
+    }
+
     /// Ghost block columns (sorted global block indices).
     pub fn ghost_blocks(&self) -> &[usize] {
         &self.ghost_blocks
@@ -513,11 +518,10 @@ pub(crate) mod tests {
     fn assemble_and_check(prob: &Problem, p: usize, constrained: &[usize]) {
         let dense = {
             let mut a = prob.dense();
-            let n = a.len();
             for &d in constrained {
-                for k in 0..n {
-                    a[d][k] = 0.0;
-                    a[k][d] = 0.0;
+                a[d].fill(0.0);
+                for row in a.iter_mut() {
+                    row[d] = 0.0;
                 }
                 a[d][d] = 1.0;
             }

@@ -9,7 +9,7 @@ pub mod block_jacobi;
 pub mod gmres;
 pub mod matrix;
 
-pub use block_jacobi::BlockJacobi;
+pub use block_jacobi::{BlockJacobi, Factorization};
 pub use gmres::{gmres, GmresOptions, GmresStats};
 
 pub use matrix::DistMatrix;
