@@ -15,7 +15,11 @@ fn main() {
         eprintln!("rank {r}: f64 {a},{b} got {}", recv.len());
         let bytes: Vec<u8> = (0..n).map(|i| (i % 251) as u8).collect();
         let recv = comm.alltoallv_bytes(&bytes, &send_counts, &recv_counts);
-        let want: Vec<u8> = if r == 0 { bytes[..a].to_vec() } else { bytes_from0(a, b) };
+        let want: Vec<u8> = if r == 0 {
+            bytes[..a].to_vec()
+        } else {
+            bytes_from0(a, b)
+        };
         assert_eq!(recv, want, "rank {r}: bytes {a},{b}");
         let mut bc = if r == 0 { bytes.clone() } else { Vec::new() };
         comm.broadcast_bytes(0, &mut bc);

@@ -69,7 +69,11 @@ pub struct Phases {
 pub fn peak_rss_mb() -> f64 {
     std::fs::read_to_string("/proc/self/status")
         .ok()
-        .and_then(|s| s.lines().find(|l| l.starts_with("VmHWM:")).and_then(|l| l.split_whitespace().nth(1)?.parse::<f64>().ok()))
+        .and_then(|s| {
+            s.lines()
+                .find(|l| l.starts_with("VmHWM:"))
+                .and_then(|l| l.split_whitespace().nth(1)?.parse::<f64>().ok())
+        })
         .map(|kb| kb / 1024.0)
         .unwrap_or(0.0)
 }
@@ -113,7 +117,12 @@ pub fn newton_options(def: &crate::model::def::Settings) -> NewtonOptions {
         max_iterations: s.max_iterations,
         residual_rtol: s.residual_rtol,
         increment_rtol: s.increment_rtol,
-        linear: GmresOptions { rtol: s.linear.rtol, atol: 0.0, restart: s.linear.restart, max_iterations: s.linear.max_iterations },
+        linear: GmresOptions {
+            rtol: s.linear.rtol,
+            atol: 0.0,
+            restart: s.linear.restart,
+            max_iterations: s.linear.max_iterations,
+        },
         block_jacobi: s.linear.preconditioner == PreconditionerKind::BlockJacobi,
     }
 }
@@ -126,7 +135,13 @@ pub fn setup(comm: &dyn Comm, opts: &RunOptions, phases: &mut Phases) -> Result<
         let src = crate::scene::load(&opts.target)?;
         let def = crate::scene::model(&src)?;
         let tp = Instant::now();
-        let (part, origin, _) = cache::get(&opts.partitions, &def.settings.scene, &def.mesh, comm.size(), opts.repartition)?;
+        let (part, origin, _) = cache::get(
+            &opts.partitions,
+            &def.settings.scene,
+            &def.mesh,
+            comm.size(),
+            opts.repartition,
+        )?;
         let pieces = distribute::split(&def, &part, comm.size());
         t_part = tp.elapsed().as_secs_f64();
         let origin = match origin {
@@ -149,18 +164,51 @@ pub fn setup(comm: &dyn Comm, opts: &RunOptions, phases: &mut Phases) -> Result<
     Ok((model, origin))
 }
 
-/// Collective: the whole `alfe run`. Returns the summary; a run that did not converge
-/// returns `Err(Convergence)` after writing everything converged so far and the summary.
-pub fn run(comm: &dyn Comm, opts: &RunOptions) -> Result<(Summary, Vec<f64>)> {
+/// What `run` hands back to a caller in the same process (tests, scripts in Rust).
+pub struct RunOutcome {
+    pub summary: Summary,
+    /// The converged displacement of the owned nodes (3 per node, rank-contiguous order).
+    pub u: Vec<f64>,
+    pub model: Model,
+    /// Every converged step's record.
+    pub steps: Vec<crate::solve::stepping::StepRecord>,
+}
+
+impl RunOutcome {
+    /// Displacement of every owned node indexed by the user's node number.
+    pub fn displacement_by_node(&self) -> Vec<(usize, [f64; 3], [f64; 3])> {
+        let l = &self.model.local;
+        (0..l.n_owned())
+            .map(|i| {
+                (
+                    l.orig_node[i] as usize,
+                    l.coords[i],
+                    [self.u[3 * i], self.u[3 * i + 1], self.u[3 * i + 2]],
+                )
+            })
+            .collect()
+    }
+}
+
+/// Collective: the whole `alfe run`. A run that did not converge returns
+/// `Err(Convergence)` after writing everything converged so far and the summary.
+pub fn run(comm: &dyn Comm, opts: &RunOptions) -> Result<RunOutcome> {
     let t_start = Instant::now();
     let mut phases = Phases::default();
     let (mut model, origin) = setup(comm, opts, &mut phases)?;
     let scene = model.local.settings.scene.clone();
-    let out = opts.out.clone().unwrap_or_else(|| PathBuf::from("out").join(&scene));
+    let out = opts
+        .out
+        .clone()
+        .unwrap_or_else(|| PathBuf::from("out").join(&scene));
     let mut writer = ResultsWriter::create(comm, &out, &model)?;
     let nopts = newton_options(&model.local.settings);
     let every = model.local.settings.output.every;
-    let n_steps = crate::solve::stepping::step_times(model.local.settings.analysis.end_time, model.local.settings.analysis.step).len();
+    let n_steps = crate::solve::stepping::step_times(
+        model.local.settings.analysis.end_time,
+        model.local.settings.analysis.step,
+    )
+    .len();
     let quiet = opts.quiet || comm.rank() != 0;
     if !quiet {
         println!(
@@ -173,10 +221,12 @@ pub fn run(comm: &dyn Comm, opts: &RunOptions) -> Result<(Summary, Vec<f64>)> {
         );
     }
     let mut u = Vec::new();
+    let mut records = Vec::new();
     let set_names = model.local.reaction_sets.clone();
     let totals: RunTotals = run_static(comm, &mut model, &mut u, &nopts, &mut |rec, u, m| {
         let fields = rec.step % every == 0 || rec.step == n_steps;
         writer.step(comm, rec, u, m, fields)?;
+        records.push(rec.clone());
         if !quiet {
             let reac = set_names
                 .iter()
@@ -198,7 +248,13 @@ pub fn run(comm: &dyn Comm, opts: &RunOptions) -> Result<(Summary, Vec<f64>)> {
     phases.assembly = totals.seconds_assembly;
     phases.linear_solve = totals.seconds_linear;
     phases.output = writer.seconds;
-    let mut ph = [phases.setup, phases.partition, phases.assembly, phases.linear_solve, phases.output];
+    let mut ph = [
+        phases.setup,
+        phases.partition,
+        phases.assembly,
+        phases.linear_solve,
+        phases.output,
+    ];
     comm.allreduce_max(&mut ph);
     let rss = comm.allgather_f64(peak_rss_mb());
     let message = totals.failure.clone().unwrap_or_else(|| "converged".into());
@@ -217,7 +273,13 @@ pub fn run(comm: &dyn Comm, opts: &RunOptions) -> Result<(Summary, Vec<f64>)> {
         factorizations: totals.factorizations,
         retries: totals.retries,
         wall_time_s: t_start.elapsed().as_secs_f64(),
-        phases: Phases { setup: ph[0], partition: ph[1], assembly: ph[2], linear_solve: ph[3], output: ph[4] },
+        phases: Phases {
+            setup: ph[0],
+            partition: ph[1],
+            assembly: ph[2],
+            linear_solve: ph[3],
+            output: ph[4],
+        },
         peak_rss_mb: rss.iter().cloned().fold(0.0, f64::max),
         peak_rss_mb_per_rank: rss,
         partition: origin,
@@ -228,17 +290,31 @@ pub fn run(comm: &dyn Comm, opts: &RunOptions) -> Result<(Summary, Vec<f64>)> {
     let r = if comm.rank() == 0 {
         serde_json::to_string_pretty(&summary)
             .map_err(|e| Error::runtime(e.to_string()))
-            .and_then(|s| std::fs::write(out.join("summary.json"), s + "\n").map_err(|e| Error::runtime(format!("cannot write summary.json: {e}"))))
+            .and_then(|s| {
+                std::fs::write(out.join("summary.json"), s + "\n")
+                    .map_err(|e| Error::runtime(format!("cannot write summary.json: {e}")))
+            })
     } else {
         Ok(())
     };
     if !comm.all_ok(r.is_ok()) {
-        return Err(r.err().unwrap_or_else(|| Error::runtime("writing summary.json failed on rank 0")));
+        return Err(r
+            .err()
+            .unwrap_or_else(|| Error::runtime("writing summary.json failed on rank 0")));
     }
     if let Some(f) = totals.failure {
-        return Err(Error::convergence(format!("{f}; {} converged step(s) written to {}", totals.steps, out.display())));
+        return Err(Error::convergence(format!(
+            "{f}; {} converged step(s) written to {}",
+            totals.steps,
+            out.display()
+        )));
     }
-    Ok((summary, u))
+    Ok(RunOutcome {
+        summary,
+        u,
+        model,
+        steps: records,
+    })
 }
 
 /// `alfe check`: validate and report the model size and partition quality (serial).
@@ -293,11 +369,29 @@ fn describe_partition(def: &ModelDef, part: &[u32], ranks: usize) -> Result<Stri
             q.ghost_nodes_per_rank[r]
         ));
     }
+    for (name, faces) in &def.surfaces {
+        let mut rs: Vec<u32> = faces.iter().map(|f| part[f.elem]).collect();
+        rs.sort_unstable();
+        rs.dedup();
+        s.push_str(&format!(
+            "  surface {name} on rank(s) {}\n",
+            rs.iter()
+                .map(|r| r.to_string())
+                .collect::<Vec<_>>()
+                .join(",")
+        ));
+    }
     for (name, nodes) in &def.node_sets {
         let mut rs: Vec<u32> = nodes.iter().map(|&n| owner[n]).collect();
         rs.sort_unstable();
         rs.dedup();
-        s.push_str(&format!("  set {name} owned by rank(s) {}\n", rs.iter().map(|r| r.to_string()).collect::<Vec<_>>().join(",")));
+        s.push_str(&format!(
+            "  set {name} owned by rank(s) {}\n",
+            rs.iter()
+                .map(|r| r.to_string())
+                .collect::<Vec<_>>()
+                .join(",")
+        ));
     }
     Ok(s)
 }
@@ -305,12 +399,18 @@ fn describe_partition(def: &ModelDef, part: &[u32], ranks: usize) -> Result<Stri
 /// `alfe partition`: compute the METIS partition and write it to the cache directory.
 pub fn partition(target: &str, ranks: usize, dir: &std::path::Path) -> Result<String> {
     if ranks < 2 {
-        return Err(Error::input("--ranks: expected 2 or more (one rank needs no partition)"));
+        return Err(Error::input(
+            "--ranks: expected 2 or more (one rank needs no partition)",
+        ));
     }
     let src = crate::scene::load(target)?;
     let def = crate::scene::model(&src)?;
     let part = crate::partition::partition_elements(&def.mesh, ranks)?;
     let file = cache::path(dir, &def.settings.scene, ranks);
     cache::write(&file, &def.mesh, ranks, &part)?;
-    Ok(format!("wrote {}\n{}", file.display(), describe_partition(&def, &part, ranks)?))
+    Ok(format!(
+        "wrote {}\n{}",
+        file.display(),
+        describe_partition(&def, &part, ranks)?
+    ))
 }

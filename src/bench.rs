@@ -54,10 +54,16 @@ step = 1.0
 
 fn parse_cells(s: Option<&str>) -> Result<[usize; 3]> {
     let Some(s) = s else { return Ok([44, 44, 44]) };
-    let v: Vec<usize> = s.split(',').map(|x| x.trim().parse::<usize>()).collect::<std::result::Result<_, _>>().map_err(|_| Error::input(format!("--cells: expected NX,NY,NZ, got `{s}`")))?;
+    let v: Vec<usize> = s
+        .split(',')
+        .map(|x| x.trim().parse::<usize>())
+        .collect::<std::result::Result<_, _>>()
+        .map_err(|_| Error::input(format!("--cells: expected NX,NY,NZ, got `{s}`")))?;
     match v.as_slice() {
         [a, b, c] if *a > 0 && *b > 0 && *c > 0 => Ok([*a, *b, *c]),
-        _ => Err(Error::input(format!("--cells: expected three positive counts NX,NY,NZ, got `{s}`"))),
+        _ => Err(Error::input(format!(
+            "--cells: expected three positive counts NX,NY,NZ, got `{s}`"
+        ))),
     }
 }
 
@@ -75,16 +81,32 @@ fn time_median(comm: &dyn Comm, reps: usize, mut f: impl FnMut() -> Result<()>) 
     Ok(ts[ts.len() / 2])
 }
 
-pub fn bench_linear(comm: &dyn Comm, cells: Option<&str>, rtol: Option<&str>, json: Option<&str>, export: Option<&str>) -> Result<()> {
+pub fn bench_linear(
+    comm: &dyn Comm,
+    cells: Option<&str>,
+    rtol: Option<&str>,
+    json: Option<&str>,
+    export: Option<&str>,
+) -> Result<()> {
     let cells = parse_cells(cells)?;
     let rtol: f64 = match rtol {
         None => 1e-8,
-        Some(s) => s.parse().ok().filter(|v: &f64| *v > 0.0 && *v < 1.0).ok_or_else(|| Error::input(format!("--rtol: expected a number in (0, 1), got `{s}`")))?,
+        Some(s) => s
+            .parse()
+            .ok()
+            .filter(|v: &f64| *v > 0.0 && *v < 1.0)
+            .ok_or_else(|| {
+                Error::input(format!("--rtol: expected a number in (0, 1), got `{s}`"))
+            })?,
     };
     let p = comm.size();
     let t_setup = Instant::now();
     let pieces = on_rank0(comm, || {
-        let src = crate::scene::Source { text: deck(cells), dir: ".".into(), label: "bench-linear".into() };
+        let src = crate::scene::Source {
+            text: deck(cells),
+            dir: ".".into(),
+            label: "bench-linear".into(),
+        };
         let def = crate::scene::model(&src)?;
         let part = partition_elements(&def.mesh, p)?;
         Ok(distribute::split(&def, &part, p))
@@ -94,10 +116,14 @@ pub fn bench_linear(comm: &dyn Comm, cells: Option<&str>, rtol: Option<&str>, js
     let setup_s = t_setup.elapsed().as_secs_f64();
     let n = model.n_owned_dofs();
     let ne_local = model.local.n_elems() as f64;
-    let u: Vec<f64> = (0..n).map(|i| 1e-6 * ((i * 7919 % 1000) as f64 / 1000.0 - 0.5)).collect();
+    let u: Vec<f64> = (0..n)
+        .map(|i| 1e-6 * ((i * 7919 % 1000) as f64 / 1000.0 - 0.5))
+        .collect();
     let mut r = vec![0.0; n];
     let reps = 5;
-    let t_res = time_median(comm, reps, || model.residual(comm, &u, 1.0, &mut r).map(|_| ()))?;
+    let t_res = time_median(comm, reps, || {
+        model.residual(comm, &u, 1.0, &mut r).map(|_| ())
+    })?;
     let mut k = model.new_matrix(comm);
     let t_jac = time_median(comm, reps, || model.jacobian(comm, &u, 1.0, &mut k))?;
     // The system K du = −r(0) with the clamp imposed: the linear-elastic solution.
@@ -117,7 +143,12 @@ pub fn bench_linear(comm: &dyn Comm, cells: Option<&str>, rtol: Option<&str>, js
     let t_factor_first = t.elapsed().as_secs_f64();
     debug_assert!(ok);
     let t_refactor = time_median(comm, 3, || pc.refactor(&k))?;
-    let opts = GmresOptions { rtol, atol: 0.0, restart: 60, max_iterations: 5000 };
+    let opts = GmresOptions {
+        rtol,
+        atol: 0.0,
+        restart: 60,
+        max_iterations: 5000,
+    };
     let mut x = vec![0.0; n];
     comm.barrier();
     let t = Instant::now();
@@ -129,7 +160,14 @@ pub fn bench_linear(comm: &dyn Comm, cells: Option<&str>, rtol: Option<&str>, js
     let res: Vec<f64> = b.iter().zip(&ax).map(|(b, a)| b - a).collect();
     let true_rel = comm.norm2(&res) / comm.norm2(&b);
     // HDF5 write bandwidth: displacement + a stress-sized array, collectively.
-    let dir = json.map(|j| Path::new(j).parent().unwrap_or(Path::new(".")).to_path_buf()).unwrap_or_else(std::env::temp_dir);
+    let dir = json
+        .map(|j| {
+            Path::new(j)
+                .parent()
+                .unwrap_or(Path::new("."))
+                .to_path_buf()
+        })
+        .unwrap_or_else(std::env::temp_dir);
     let h5path = dir.join(format!("bench-linear-{}.h5", std::process::id()));
     let stress = vec![1.0f64; 6 * model.local.n_elems()];
     comm.barrier();
@@ -187,21 +225,30 @@ pub fn bench_linear(comm: &dyn Comm, cells: Option<&str>, rtol: Option<&str>, js
     if comm.rank() == 0 {
         println!("{}", serde_json::to_string_pretty(&out).unwrap());
         if let Some(j) = json {
-            std::fs::write(j, serde_json::to_string_pretty(&out).unwrap() + "\n").map_err(|e| Error::runtime(format!("cannot write `{j}`: {e}")))?;
+            std::fs::write(j, serde_json::to_string_pretty(&out).unwrap() + "\n")
+                .map_err(|e| Error::runtime(format!("cannot write `{j}`: {e}")))?;
         }
     }
     if let Some(dir) = export {
         export_petsc(comm, Path::new(dir), &k, &b)?;
     }
     if !gs.converged {
-        return Err(Error::convergence(format!("GMRES did not converge in {} iterations", gs.iterations)));
+        return Err(Error::convergence(format!(
+            "GMRES did not converge in {} iterations",
+            gs.iterations
+        )));
     }
     Ok(())
 }
 
 /// Gather the matrix and right-hand side on rank 0 and write them in PETSc's binary
 /// format (big-endian; MatLoad / VecLoad read them) as `DIR/A.petsc`, `DIR/b.petsc`.
-fn export_petsc(comm: &dyn Comm, dir: &Path, k: &crate::solve::linear::matrix::DistMatrix, b: &[f64]) -> Result<()> {
+fn export_petsc(
+    comm: &dyn Comm,
+    dir: &Path,
+    k: &crate::solve::linear::matrix::DistMatrix,
+    b: &[f64],
+) -> Result<()> {
     let (ptr, cols, vals) = k.local_csr();
     let p = comm.size();
     let to0 = |n: usize| -> Vec<usize> { (0..p).map(|r| if r == 0 { n } else { 0 }).collect() };
@@ -252,7 +299,9 @@ fn export_petsc(comm: &dyn Comm, dir: &Path, k: &crate::solve::linear::matrix::D
         Ok(())
     };
     if !comm.all_ok(r.is_ok()) {
-        return Err(r.err().unwrap_or_else(|| Error::runtime("PETSc export failed on rank 0")));
+        return Err(r
+            .err()
+            .unwrap_or_else(|| Error::runtime("PETSc export failed on rank 0")));
     }
     Ok(())
 }

@@ -42,14 +42,18 @@ fn parse_args(raw: &[String], valued: &[&str], bare: &[&str]) -> Result<Args> {
         let a = &raw[i];
         if let Some(name) = a.strip_prefix("--") {
             if valued.contains(&name) {
-                let v = raw.get(i + 1).ok_or_else(|| Error::input(format!("--{name}: expected a value")))?;
+                let v = raw
+                    .get(i + 1)
+                    .ok_or_else(|| Error::input(format!("--{name}: expected a value")))?;
                 flags.push((name.to_string(), Some(v.clone())));
                 i += 2;
                 continue;
             } else if bare.contains(&name) {
                 flags.push((name.to_string(), None));
             } else {
-                return Err(Error::input(format!("unknown option `{a}` (see `alfe --help`)")));
+                return Err(Error::input(format!(
+                    "unknown option `{a}` (see `alfe --help`)"
+                )));
             }
         } else {
             words.push(a.clone());
@@ -61,14 +65,22 @@ fn parse_args(raw: &[String], valued: &[&str], bare: &[&str]) -> Result<Args> {
 
 impl Args {
     fn get(&self, name: &str) -> Option<&str> {
-        self.flags.iter().rev().find(|(n, _)| n == name).and_then(|(_, v)| v.as_deref())
+        self.flags
+            .iter()
+            .rev()
+            .find(|(n, _)| n == name)
+            .and_then(|(_, v)| v.as_deref())
     }
     fn has(&self, name: &str) -> bool {
         self.flags.iter().any(|(n, _)| n == name)
     }
     fn ranks(&self) -> Result<Option<usize>> {
         self.get("ranks")
-            .map(|v| v.parse::<usize>().ok().filter(|&n| n >= 1).ok_or_else(|| Error::input(format!("--ranks: expected a positive integer, got `{v}`"))))
+            .map(|v| {
+                v.parse::<usize>().ok().filter(|&n| n >= 1).ok_or_else(|| {
+                    Error::input(format!("--ranks: expected a positive integer, got `{v}`"))
+                })
+            })
             .transpose()
     }
 }
@@ -77,7 +89,10 @@ fn one_target(words: &[String], cmd: &str) -> Result<String> {
     match words {
         [] => Ok(alfe::scene::DEFAULT_SCENE.to_string()),
         [t] => Ok(t.clone()),
-        _ => Err(Error::input(format!("`alfe {cmd}` takes one scene name or deck path, got {}", words.len()))),
+        _ => Err(Error::input(format!(
+            "`alfe {cmd}` takes one scene name or deck path, got {}",
+            words.len()
+        ))),
     }
 }
 
@@ -111,7 +126,7 @@ fn main_inner(comm: &dyn Comm, raw: &[String]) -> Result<()> {
                 repartition: a.has("repartition"),
                 quiet: a.has("quiet"),
             };
-            let (s, _) = app::run(comm, &opts)?;
+            let s = app::run(comm, &opts)?.summary;
             say(&format!(
                 "alfe: {} steps converged in {:.2} s ({} Newton, {} GMRES iterations); results in {}/ ({}.h5, {}.xmf, history.csv, summary.json)",
                 s.steps, s.wall_time_s, s.nonlinear_iterations, s.linear_iterations, s.output_dir, s.scene, s.scene
@@ -127,12 +142,19 @@ fn main_inner(comm: &dyn Comm, raw: &[String]) -> Result<()> {
         }
         "scene" => match rest {
             [show, name] if show == "show" => {
-                let (_, _, text) = alfe::scene::BUILTIN.iter().find(|(n, _, _)| n == name).ok_or_else(|| {
-                    Error::input(format!(
-                        "unknown scene `{name}` (built-in scenes: {})",
-                        alfe::scene::BUILTIN.iter().map(|s| s.0).collect::<Vec<_>>().join(", ")
-                    ))
-                })?;
+                let (_, _, text) = alfe::scene::BUILTIN
+                    .iter()
+                    .find(|(n, _, _)| n == name)
+                    .ok_or_else(|| {
+                        Error::input(format!(
+                            "unknown scene `{name}` (built-in scenes: {})",
+                            alfe::scene::BUILTIN
+                                .iter()
+                                .map(|s| s.0)
+                                .collect::<Vec<_>>()
+                                .join(", ")
+                        ))
+                    })?;
                 if root {
                     print!("{text}");
                 }
@@ -153,7 +175,9 @@ fn main_inner(comm: &dyn Comm, raw: &[String]) -> Result<()> {
         "partition" => {
             let a = parse_args(rest, &["ranks", "partitions"], &[])?;
             let target = one_target(&a.words, "partition")?;
-            let ranks = a.ranks()?.ok_or_else(|| Error::input("--ranks: required (the rank count to partition for)"))?;
+            let ranks = a.ranks()?.ok_or_else(|| {
+                Error::input("--ranks: required (the rank count to partition for)")
+            })?;
             let dir = PathBuf::from(a.get("partitions").unwrap_or("partitions"));
             let r = app::on_rank0(comm, || app::partition(&target, ranks, &dir))?;
             if let Some(s) = r {
@@ -163,9 +187,17 @@ fn main_inner(comm: &dyn Comm, raw: &[String]) -> Result<()> {
         }
         "bench-linear" => {
             let a = parse_args(rest, &["cells", "rtol", "json", "export"], &[])?;
-            alfe::bench::bench_linear(comm, a.get("cells"), a.get("rtol"), a.get("json"), a.get("export"))
+            alfe::bench::bench_linear(
+                comm,
+                a.get("cells"),
+                a.get("rtol"),
+                a.get("json"),
+                a.get("export"),
+            )
         }
-        other => Err(Error::input(format!("unknown command `{other}` (see `alfe --help`)"))),
+        other => Err(Error::input(format!(
+            "unknown command `{other}` (see `alfe --help`)"
+        ))),
     }
 }
 

@@ -16,7 +16,9 @@ pub enum MaterialDef {
 impl MaterialDef {
     pub fn build(&self) -> Box<dyn Material> {
         match *self {
-            MaterialDef::LinearElastic { e, nu, density } => Box::new(LinearElastic::new(e, nu, density)),
+            MaterialDef::LinearElastic { e, nu, density } => {
+                Box::new(LinearElastic::new(e, nu, density))
+            }
             MaterialDef::NeoHookean { e, nu, density } => Box::new(NeoHookean::new(e, nu, density)),
         }
     }
@@ -31,7 +33,9 @@ pub struct Curve {
 impl Curve {
     /// The default load curve: 0 at t = 0 rising linearly to 1 at `end`.
     pub fn ramp(end: f64) -> Self {
-        Self { points: vec![[0.0, 0.0], [end, 1.0]] }
+        Self {
+            points: vec![[0.0, 0.0], [end, 1.0]],
+        }
     }
     pub fn eval(&self, t: f64) -> f64 {
         let p = &self.points;
@@ -61,11 +65,23 @@ pub struct Constraint {
 #[derive(Debug, Clone, Serialize, Deserialize)]
 pub enum Load {
     /// Per-node force on a node set.
-    Nodal { set: String, force: [f64; 3], curve: Curve },
+    Nodal {
+        set: String,
+        force: [f64; 3],
+        curve: Curve,
+    },
     /// Dead traction on a surface (per reference area).
-    Traction { surface: String, traction: [f64; 3], curve: Curve },
+    Traction {
+        surface: String,
+        traction: [f64; 3],
+        curve: Curve,
+    },
     /// Follower pressure on a surface.
-    Pressure { surface: String, pressure: f64, curve: Curve },
+    Pressure {
+        surface: String,
+        pressure: f64,
+        curve: Curve,
+    },
 }
 
 #[derive(Debug, Clone, Serialize, Deserialize)]
@@ -105,7 +121,9 @@ mod tests {
     use super::*;
     #[test]
     fn curve_interpolates_and_clamps() {
-        let c = Curve { points: vec![[0.0, 0.0], [1.0, 2.0], [2.0, 2.0]] };
+        let c = Curve {
+            points: vec![[0.0, 0.0], [1.0, 2.0], [2.0, 2.0]],
+        };
         assert_eq!(c.eval(-1.0), 0.0);
         assert!((c.eval(0.25) - 0.5).abs() < 1e-15);
         assert_eq!(c.eval(1.5), 2.0);

@@ -57,10 +57,17 @@ impl Model {
         let blocks = Layout::from_counts(&local.owned_nodes_per_rank, local.rank);
         let dof_counts: Vec<usize> = local.owned_nodes_per_rank.iter().map(|c| 3 * c).collect();
         let dofs = Layout::from_counts(&dof_counts, local.rank);
-        let ghost_dofs: Vec<usize> = local.ghosts.iter().flat_map(|&g| (0..3).map(move |c| 3 * g + c)).collect();
+        let ghost_dofs: Vec<usize> = local
+            .ghosts
+            .iter()
+            .flat_map(|&g| (0..3).map(move |c| 3 * g + c))
+            .collect();
         let halo = HaloPlan::new(comm, &dofs, ghost_dofs);
-        let node_block: Vec<usize> = (0..local.n_local_nodes()).map(|n| local.global_node(n)).collect();
-        let materials: Vec<Box<dyn Material>> = local.materials.iter().map(|(_, m)| m.build()).collect();
+        let node_block: Vec<usize> = (0..local.n_local_nodes())
+            .map(|n| local.global_node(n))
+            .collect();
+        let materials: Vec<Box<dyn Material>> =
+            local.materials.iter().map(|(_, m)| m.build()).collect();
         let mut state_offset = Vec::with_capacity(local.n_elems() + 1);
         let mut s = 0;
         for e in 0..local.n_elems() {
@@ -71,7 +78,11 @@ impl Model {
         // Constraints: later entries win where two constrain the same dof.
         let mut which = vec![usize::MAX; 3 * local.n_local_nodes()];
         for (ci, c) in local.constraints.iter().enumerate() {
-            let nodes = local.node_sets.get(&c.set).map(|v| v.as_slice()).unwrap_or(&[]);
+            let nodes = local
+                .node_sets
+                .get(&c.set)
+                .map(|v| v.as_slice())
+                .unwrap_or(&[]);
             for &n in nodes {
                 for k in 0..3 {
                     if c.comps[k] {
@@ -80,13 +91,28 @@ impl Model {
                 }
             }
         }
-        let constrained_local: Vec<(usize, usize)> = which.iter().enumerate().filter(|(_, &c)| c != usize::MAX).map(|(d, &c)| (d, c)).collect();
+        let constrained_local: Vec<(usize, usize)> = which
+            .iter()
+            .enumerate()
+            .filter(|(_, &c)| c != usize::MAX)
+            .map(|(d, &c)| (d, c))
+            .collect();
         let n_owned_dofs = 3 * local.n_owned();
-        let constrained_owned = constrained_local.iter().copied().filter(|&(d, _)| d < n_owned_dofs).collect();
+        let constrained_owned = constrained_local
+            .iter()
+            .copied()
+            .filter(|&(d, _)| d < n_owned_dofs)
+            .collect();
         let reaction_nodes = local
             .reaction_sets
             .iter()
-            .map(|s| local.node_sets.get(s).map(|v| v.iter().copied().filter(|&n| n < local.n_owned()).collect()).unwrap_or_default())
+            .map(|s| {
+                local
+                    .node_sets
+                    .get(s)
+                    .map(|v| v.iter().copied().filter(|&n| n < local.n_owned()).collect())
+                    .unwrap_or_default()
+            })
             .collect();
         let n_local_dofs = 3 * local.n_local_nodes();
         Ok(Self {
@@ -131,7 +157,13 @@ impl Model {
             .collect()
     }
 
-    fn elem_coords(&self, e: usize, u_local: &[f64], x0: &mut [[f64; 3]; 8], u: &mut [[f64; 3]; 8]) -> usize {
+    fn elem_coords(
+        &self,
+        e: usize,
+        u_local: &[f64],
+        x0: &mut [[f64; 3]; 8],
+        u: &mut [[f64; 3]; 8],
+    ) -> usize {
         let nodes = self.local.elem_nodes(e);
         for (a, &n) in nodes.iter().enumerate() {
             x0[a] = self.local.coords[n];
@@ -143,7 +175,13 @@ impl Model {
     /// Residual r = f_int(u) − f_ext(u, t) on owned dofs, constrained rows included
     /// (there r is the reaction). Collective; a failure on any rank (an inverted element)
     /// is a failure on all.
-    pub fn residual(&mut self, comm: &dyn Comm, u_owned: &[f64], t: f64, r: &mut [f64]) -> Result<ResidualInfo> {
+    pub fn residual(
+        &mut self,
+        comm: &dyn Comm,
+        u_owned: &[f64],
+        t: f64,
+        r: &mut [f64],
+    ) -> Result<ResidualInfo> {
         let mut u_local = std::mem::take(&mut self.work);
         self.gather(comm, u_owned, &mut u_local);
         let nl = u_local.len();
@@ -157,9 +195,20 @@ impl Model {
             let n = self.elem_coords(e, &u_local, &mut x0, &mut ue);
             let mat = self.materials[self.local.elem_material[e] as usize].as_ref();
             let (s0, s1) = (self.state_offset[e], self.state_offset[e + 1]);
-            let res = element_force(self.local.kinds[e], &x0[..n], &ue[..n], mat, &self.state_old[s0..s1], &mut self.state_new[s0..s1], &mut fe[..3 * n], None);
+            let res = element_force(
+                self.local.kinds[e],
+                &x0[..n],
+                &ue[..n],
+                mat,
+                &self.state_old[s0..s1],
+                &mut self.state_new[s0..s1],
+                &mut fe[..3 * n],
+                None,
+            );
             if let Err(err) = res {
-                failure.get_or_insert_with(|| format!("element {}: {}", self.local.orig_elem[e], err.0));
+                failure.get_or_insert_with(|| {
+                    format!("element {}: {}", self.local.orig_elem[e], err.0)
+                });
                 continue;
             }
             for (a, &node) in self.local.elem_nodes(e).iter().enumerate() {
@@ -186,14 +235,24 @@ impl Model {
         self.work = u_local;
         if sums[2] > 0.0 {
             let msg = failure.unwrap_or_else(|| "an element on another rank failed".into());
-            return Err(Error::convergence(format!("residual could not be evaluated: {msg}")));
+            return Err(Error::convergence(format!(
+                "residual could not be evaluated: {msg}"
+            )));
         }
-        Ok(ResidualInfo { f_ref: sums[0].sqrt().max(sums[1].sqrt()) })
+        Ok(ResidualInfo {
+            f_ref: sums[0].sqrt().max(sums[1].sqrt()),
+        })
     }
 
     /// External forces at time t into `f` (local dofs); if `k` is given, the load
     /// stiffness −∂f_ext/∂u of follower loads is added to it.
-    fn external_forces(&self, u_local: &[f64], t: f64, f: &mut [f64], mut k: Option<&mut DistMatrix>) {
+    fn external_forces(
+        &self,
+        u_local: &[f64],
+        t: f64,
+        f: &mut [f64],
+        mut k: Option<&mut DistMatrix>,
+    ) {
         let no = self.local.n_owned();
         let mut fe = [0.0; 12];
         let mut ke = [0.0; 144];
@@ -201,7 +260,13 @@ impl Model {
             match load {
                 Load::Nodal { set, force, curve } => {
                     let s = curve.eval(t);
-                    for &n in self.local.node_sets.get(set).map(|v| v.as_slice()).unwrap_or(&[]) {
+                    for &n in self
+                        .local
+                        .node_sets
+                        .get(set)
+                        .map(|v| v.as_slice())
+                        .unwrap_or(&[])
+                    {
                         if n < no {
                             for c in 0..3 {
                                 f[3 * n + c] += force[c] * s;
@@ -209,12 +274,23 @@ impl Model {
                         }
                     }
                 }
-                Load::Traction { surface, traction, curve } => {
+                Load::Traction {
+                    surface,
+                    traction,
+                    curve,
+                } => {
                     let s = curve.eval(t);
                     let tr = [traction[0] * s, traction[1] * s, traction[2] * s];
-                    for &(e, face) in self.local.surfaces.get(surface).map(|v| v.as_slice()).unwrap_or(&[]) {
+                    for &(e, face) in self
+                        .local
+                        .surfaces
+                        .get(surface)
+                        .map(|v| v.as_slice())
+                        .unwrap_or(&[])
+                    {
                         let nodes = self.face_nodes(e, face);
-                        let x0: Vec<[f64; 3]> = nodes.iter().map(|&n| self.local.coords[n]).collect();
+                        let x0: Vec<[f64; 3]> =
+                            nodes.iter().map(|&n| self.local.coords[n]).collect();
                         let m = nodes.len();
                         traction_face(&x0, tr, &mut fe[..3 * m]);
                         for (a, &n) in nodes.iter().enumerate() {
@@ -224,15 +300,39 @@ impl Model {
                         }
                     }
                 }
-                Load::Pressure { surface, pressure, curve } => {
+                Load::Pressure {
+                    surface,
+                    pressure,
+                    curve,
+                } => {
                     let p = pressure * curve.eval(t);
-                    for &(e, face) in self.local.surfaces.get(surface).map(|v| v.as_slice()).unwrap_or(&[]) {
+                    for &(e, face) in self
+                        .local
+                        .surfaces
+                        .get(surface)
+                        .map(|v| v.as_slice())
+                        .unwrap_or(&[])
+                    {
                         let nodes = self.face_nodes(e, face);
                         let m = nodes.len();
-                        let x0: Vec<[f64; 3]> = nodes.iter().map(|&n| self.local.coords[n]).collect();
-                        let u: Vec<[f64; 3]> = nodes.iter().map(|&n| [u_local[3 * n], u_local[3 * n + 1], u_local[3 * n + 2]]).collect();
+                        let x0: Vec<[f64; 3]> =
+                            nodes.iter().map(|&n| self.local.coords[n]).collect();
+                        let u: Vec<[f64; 3]> = nodes
+                            .iter()
+                            .map(|&n| [u_local[3 * n], u_local[3 * n + 1], u_local[3 * n + 2]])
+                            .collect();
                         let want_k = k.is_some();
-                        pressure_face(&x0, &u, p, &mut fe[..3 * m], if want_k { Some(&mut ke[..9 * m * m]) } else { None });
+                        pressure_face(
+                            &x0,
+                            &u,
+                            p,
+                            &mut fe[..3 * m],
+                            if want_k {
+                                Some(&mut ke[..9 * m * m])
+                            } else {
+                                None
+                            },
+                        );
                         for (a, &n) in nodes.iter().enumerate() {
                             for c in 0..3 {
                                 f[3 * n + c] += fe[3 * a + c];
@@ -241,7 +341,8 @@ impl Model {
                         if let Some(kmat) = k.as_deref_mut() {
                             // Jacobian of r = f_int − f_ext gets −∂f_ext/∂u.
                             let neg: Vec<f64> = ke[..9 * m * m].iter().map(|v| -v).collect();
-                            let blocks: Vec<usize> = nodes.iter().map(|&n| self.node_block[n]).collect();
+                            let blocks: Vec<usize> =
+                                nodes.iter().map(|&n| self.node_block[n]).collect();
                             kmat.add_element(&blocks, &neg);
                         }
                     }
@@ -252,7 +353,10 @@ impl Model {
 
     fn face_nodes(&self, e: usize, face: u8) -> Vec<usize> {
         let en = self.local.elem_nodes(e);
-        self.local.kinds[e].faces()[face as usize].iter().map(|&i| en[i]).collect()
+        self.local.kinds[e].faces()[face as usize]
+            .iter()
+            .map(|&i| en[i])
+            .collect()
     }
 
     /// The sparsity pattern of the Jacobian (collective).
@@ -272,7 +376,13 @@ impl Model {
     }
 
     /// Assemble the (unconstrained) Jacobian ∂r/∂u at u (collective).
-    pub fn jacobian(&mut self, comm: &dyn Comm, u_owned: &[f64], t: f64, k: &mut DistMatrix) -> Result<()> {
+    pub fn jacobian(
+        &mut self,
+        comm: &dyn Comm,
+        u_owned: &[f64],
+        t: f64,
+        k: &mut DistMatrix,
+    ) -> Result<()> {
         let mut u_local = std::mem::take(&mut self.work);
         self.gather(comm, u_owned, &mut u_local);
         k.zero();
@@ -297,7 +407,9 @@ impl Model {
                 Some(&mut ke[..9 * n * n]),
             );
             if let Err(err) = res {
-                failure.get_or_insert_with(|| format!("element {}: {}", self.local.orig_elem[e], err.0));
+                failure.get_or_insert_with(|| {
+                    format!("element {}: {}", self.local.orig_elem[e], err.0)
+                });
                 continue;
             }
             for (a, &node) in self.local.elem_nodes(e).iter().enumerate() {
@@ -312,7 +424,9 @@ impl Model {
         self.work = u_local;
         if !comm.all_ok(failure.is_none()) {
             let msg = failure.unwrap_or_else(|| "an element on another rank failed".into());
-            return Err(Error::convergence(format!("Jacobian could not be assembled: {msg}")));
+            return Err(Error::convergence(format!(
+                "Jacobian could not be assembled: {msg}"
+            )));
         }
         Ok(())
     }
@@ -348,7 +462,14 @@ impl Model {
             let n = self.elem_coords(e, &u_local, &mut x0, &mut ue);
             let mat = self.materials[self.local.elem_material[e] as usize].as_ref();
             let (s0, s1) = (self.state_offset[e], self.state_offset[e + 1]);
-            let s = element_stress(self.local.kinds[e], &x0[..n], &ue[..n], mat, &self.state_old[s0..s1]).unwrap_or([f64::NAN; 6]);
+            let s = element_stress(
+                self.local.kinds[e],
+                &x0[..n],
+                &ue[..n],
+                mat,
+                &self.state_old[s0..s1],
+            )
+            .unwrap_or([f64::NAN; 6]);
             out.push(s);
         }
         Ok(out)

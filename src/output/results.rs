@@ -46,7 +46,12 @@ impl ResultsWriter {
         let l = &model.local;
         let scene = l.settings.scene.clone();
         let r = if comm.rank() == 0 {
-            std::fs::create_dir_all(dir).map_err(|e| Error::runtime(format!("cannot create output directory `{}`: {e}", dir.display())))
+            std::fs::create_dir_all(dir).map_err(|e| {
+                Error::runtime(format!(
+                    "cannot create output directory `{}`: {e}",
+                    dir.display()
+                ))
+            })
         } else {
             Ok(())
         };
@@ -89,7 +94,14 @@ impl ResultsWriter {
             XdmfTopology::Mixed { n_entries: total }
         } else {
             let npe = if kinds[1] > 0.0 { 4 } else { 8 };
-            let conn: Vec<i64> = (0..l.n_elems()).flat_map(|e| l.elem_nodes(e).iter().map(|&n| l.global_node(n) as i64).collect::<Vec<_>>()).collect();
+            let conn: Vec<i64> = (0..l.n_elems())
+                .flat_map(|e| {
+                    l.elem_nodes(e)
+                        .iter()
+                        .map(|&n| l.global_node(n) as i64)
+                        .collect::<Vec<_>>()
+                })
+                .collect();
             h5.write_rows_i64("/mesh/connectivity", n_elems, npe, elem_start, &conn)?;
             if npe == 4 {
                 XdmfTopology::Tetrahedron
@@ -120,7 +132,10 @@ impl ResultsWriter {
             n_nodes,
             n_elems,
             topology,
-            static_cell_attrs: vec![cell_i32("partition", "/mesh/partition"), cell_i32("material", "/mesh/material")],
+            static_cell_attrs: vec![
+                cell_i32("partition", "/mesh/partition"),
+                cell_i32("material", "/mesh/material"),
+            ],
         };
         let xmf_path = dir.join(format!("{scene}.xmf"));
         let mut history = None;
@@ -128,7 +143,9 @@ impl ResultsWriter {
             (|| -> Result<()> {
                 write_xdmf(&xmf_path, &xmesh, &[])?;
                 let mut f = std::fs::File::create(dir.join("history.csv"))?;
-                let mut head = String::from("step,time,nonlinear_iterations,linear_iterations,retries,wall_time_s");
+                let mut head = String::from(
+                    "step,time,nonlinear_iterations,linear_iterations,retries,wall_time_s",
+                );
                 for s in &l.reaction_sets {
                     head.push_str(&format!(",{s}.fx,{s}.fy,{s}.fz"));
                 }
@@ -141,7 +158,19 @@ impl ResultsWriter {
             Ok(())
         };
         agree(comm, r)?;
-        let mut w = Self { h5, xmf_path, xmesh, steps: Vec::new(), history, n_nodes, n_elems, node_start, elem_start, seconds: 0.0, bytes_written: 0 };
+        let mut w = Self {
+            h5,
+            xmf_path,
+            xmesh,
+            steps: Vec::new(),
+            history,
+            n_nodes,
+            n_elems,
+            node_start,
+            elem_start,
+            seconds: 0.0,
+            bytes_written: 0,
+        };
         w.bytes_written = bytes;
         w.seconds = t0.elapsed().as_secs_f64();
         Ok(w)
@@ -149,16 +178,38 @@ impl ResultsWriter {
 
     /// Collective: the history row of a converged step (always) and, if `fields`, its
     /// displacement and stress fields.
-    pub fn step(&mut self, comm: &dyn Comm, rec: &StepRecord, u: &[f64], model: &Model, fields: bool) -> Result<()> {
+    pub fn step(
+        &mut self,
+        comm: &dyn Comm,
+        rec: &StepRecord,
+        u: &[f64],
+        model: &Model,
+        fields: bool,
+    ) -> Result<()> {
         let t0 = std::time::Instant::now();
         let r = if let Some(f) = self.history.as_mut() {
             let s = &rec.stats;
-            let mut row = format!("{},{},{},{},{},{:.6}", rec.step, rec.time, s.iterations, s.linear_iterations, rec.retries, rec.wall_seconds);
+            let mut row = format!(
+                "{},{},{},{},{},{:.6}",
+                rec.step,
+                rec.time,
+                s.iterations,
+                s.linear_iterations,
+                rec.retries,
+                rec.wall_seconds
+            );
             for f3 in &rec.reactions {
                 row.push_str(&format!(",{:.12e},{:.12e},{:.12e}", f3[0], f3[1], f3[2]));
             }
-            row.push_str(&format!(",{},{},{:.3e}", s.residual_evaluations, s.factorizations, s.residual_history.last().copied().unwrap_or(0.0)));
-            writeln!(f, "{row}").and_then(|_| f.flush()).map_err(Error::from)
+            row.push_str(&format!(
+                ",{},{},{:.3e}",
+                s.residual_evaluations,
+                s.factorizations,
+                s.residual_history.last().copied().unwrap_or(0.0)
+            ));
+            writeln!(f, "{row}")
+                .and_then(|_| f.flush())
+                .map_err(Error::from)
         } else {
             Ok(())
         };
@@ -167,33 +218,62 @@ impl ResultsWriter {
             let g = format!("/steps/{:06}", rec.step);
             self.h5.create_group(&g)?;
             self.h5.write_attr_f64(&g, "time", rec.time)?;
-            self.h5.write_rows_f64(&format!("{g}/displacement"), self.n_nodes, 3, self.node_start, u)?;
+            self.h5.write_rows_f64(
+                &format!("{g}/displacement"),
+                self.n_nodes,
+                3,
+                self.node_start,
+                u,
+            )?;
             let sig = model.stresses(comm, u)?;
             let flat: Vec<f64> = sig.iter().flatten().copied().collect();
-            self.h5.write_rows_f64(&format!("{g}/stress"), self.n_elems, 6, self.elem_start, &flat)?;
+            self.h5.write_rows_f64(
+                &format!("{g}/stress"),
+                self.n_elems,
+                6,
+                self.elem_start,
+                &flat,
+            )?;
             let vm: Vec<f64> = sig.iter().map(von_mises).collect();
-            self.h5.write_rows_f64(&format!("{g}/von_mises"), self.n_elems, 1, self.elem_start, &vm)?;
+            self.h5.write_rows_f64(
+                &format!("{g}/von_mises"),
+                self.n_elems,
+                1,
+                self.elem_start,
+                &vm,
+            )?;
             self.h5.flush()?;
             self.bytes_written += 8 * (u.len() + flat.len() + vm.len()) as u64;
-            let attr = |name: &str, center: Center, kind: AttrKind, n_rows: u64, n_cols: u64| XdmfAttr {
-                name: name.into(),
-                center,
-                kind,
-                h5_path: format!("{g}/{name}"),
-                n_rows,
-                n_cols,
-                number_type: "Float",
-                precision: 8,
-            };
+            let attr =
+                |name: &str, center: Center, kind: AttrKind, n_rows: u64, n_cols: u64| XdmfAttr {
+                    name: name.into(),
+                    center,
+                    kind,
+                    h5_path: format!("{g}/{name}"),
+                    n_rows,
+                    n_cols,
+                    number_type: "Float",
+                    precision: 8,
+                };
             self.steps.push(XdmfStep {
                 time: rec.time,
                 attrs: vec![
-                    attr("displacement", Center::Node, AttrKind::Vector, self.n_nodes, 3),
+                    attr(
+                        "displacement",
+                        Center::Node,
+                        AttrKind::Vector,
+                        self.n_nodes,
+                        3,
+                    ),
                     attr("stress", Center::Cell, AttrKind::Tensor6, self.n_elems, 6),
                     attr("von_mises", Center::Cell, AttrKind::Scalar, self.n_elems, 1),
                 ],
             });
-            let r = if comm.rank() == 0 { write_xdmf(&self.xmf_path, &self.xmesh, &self.steps) } else { Ok(()) };
+            let r = if comm.rank() == 0 {
+                write_xdmf(&self.xmf_path, &self.xmesh, &self.steps)
+            } else {
+                Ok(())
+            };
             agree(comm, r)?;
         }
         self.seconds += t0.elapsed().as_secs_f64();

@@ -148,7 +148,11 @@ impl Comm for MpiComm {
             bytes.clear();
             return;
         }
-        let mut words = if self.rank() == root { pack(bytes) } else { vec![0u64; n.div_ceil(8)] };
+        let mut words = if self.rank() == root {
+            pack(bytes)
+        } else {
+            vec![0u64; n.div_ceil(8)]
+        };
         root_proc.broadcast_into(&mut words[..]);
         if self.rank() != root {
             *bytes = unpack(&words)[..n].to_vec();

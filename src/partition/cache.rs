@@ -8,23 +8,38 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 
 pub fn path(dir: &Path, scene: &str, ranks: usize) -> PathBuf {
-    let safe: String = scene.chars().map(|c| if c.is_ascii_alphanumeric() || c == '-' || c == '_' { c } else { '_' }).collect();
+    let safe: String = scene
+        .chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '-' || c == '_' {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect();
     dir.join(format!("{safe}.{ranks}.part"))
 }
 
 /// Write a partition file (creating `dir`).
 pub fn write(file: &Path, mesh: &Mesh, ranks: usize, part: &[u32]) -> Result<()> {
     if let Some(d) = file.parent() {
-        std::fs::create_dir_all(d).map_err(|e| Error::runtime(format!("cannot create `{}`: {e}", d.display())))?;
+        std::fs::create_dir_all(d)
+            .map_err(|e| Error::runtime(format!("cannot create `{}`: {e}", d.display())))?;
     }
     let mut s = String::with_capacity(part.len() * 3 + 128);
-    s.push_str(&format!("alfe-partition 1\nranks {ranks}\nelements {}\nmesh-hash {:016x}\n", mesh.n_elems(), mesh.hash()));
+    s.push_str(&format!(
+        "alfe-partition 1\nranks {ranks}\nelements {}\nmesh-hash {:016x}\n",
+        mesh.n_elems(),
+        mesh.hash()
+    ));
     for p in part {
         s.push_str(&p.to_string());
         s.push('\n');
     }
     let tmp = file.with_extension("part.tmp");
-    let mut f = std::fs::File::create(&tmp).map_err(|e| Error::runtime(format!("cannot write `{}`: {e}", tmp.display())))?;
+    let mut f = std::fs::File::create(&tmp)
+        .map_err(|e| Error::runtime(format!("cannot write `{}`: {e}", tmp.display())))?;
     f.write_all(s.as_bytes())?;
     std::fs::rename(&tmp, file)?;
     Ok(())
@@ -32,7 +47,12 @@ pub fn write(file: &Path, mesh: &Mesh, ranks: usize, part: &[u32]) -> Result<()>
 
 /// Read a partition file, refusing one made for another mesh or rank count.
 pub fn read(file: &Path, mesh: &Mesh, ranks: usize) -> Result<Vec<u32>> {
-    let text = std::fs::read_to_string(file).map_err(|e| Error::input(format!("cannot read partition file `{}`: {e}", file.display())))?;
+    let text = std::fs::read_to_string(file).map_err(|e| {
+        Error::input(format!(
+            "cannot read partition file `{}`: {e}",
+            file.display()
+        ))
+    })?;
     let bad = |why: String| {
         Error::input(format!(
             "partition file `{}` {why}; delete it or rerun with --repartition (or `alfe partition ... --ranks {ranks}`)",
@@ -42,13 +62,23 @@ pub fn read(file: &Path, mesh: &Mesh, ranks: usize) -> Result<Vec<u32>> {
     let mut lines = text.lines();
     let mut header = |key: &str| -> Result<String> {
         let l = lines.next().unwrap_or("");
-        l.strip_prefix(key).map(|v| v.trim().to_string()).ok_or_else(|| bad(format!("is not an alfe partition file (expected `{key}` header)")))
+        l.strip_prefix(key)
+            .map(|v| v.trim().to_string())
+            .ok_or_else(|| {
+                bad(format!(
+                    "is not an alfe partition file (expected `{key}` header)"
+                ))
+            })
     };
     if header("alfe-partition")? != "1" {
         return Err(bad("has an unknown version".into()));
     }
-    let r: usize = header("ranks")?.parse().map_err(|_| bad("has an unreadable rank count".into()))?;
-    let ne: usize = header("elements")?.parse().map_err(|_| bad("has an unreadable element count".into()))?;
+    let r: usize = header("ranks")?
+        .parse()
+        .map_err(|_| bad("has an unreadable rank count".into()))?;
+    let ne: usize = header("elements")?
+        .parse()
+        .map_err(|_| bad("has an unreadable element count".into()))?;
     let hash = header("mesh-hash")?;
     let want = format!("{:016x}", mesh.hash());
     if r != ranks {
@@ -80,7 +110,13 @@ pub enum Origin {
 
 /// Use the cached partition if there is one (refusing a stale one unless
 /// `repartition`), otherwise compute it with METIS and cache it.
-pub fn get(dir: &Path, scene: &str, mesh: &Mesh, ranks: usize, repartition: bool) -> Result<(Vec<u32>, Origin, PathBuf)> {
+pub fn get(
+    dir: &Path,
+    scene: &str,
+    mesh: &Mesh,
+    ranks: usize,
+    repartition: bool,
+) -> Result<(Vec<u32>, Origin, PathBuf)> {
     let file = path(dir, scene, ranks);
     if ranks <= 1 {
         return Ok((vec![0; mesh.n_elems()], Origin::Trivial, file));

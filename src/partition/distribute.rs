@@ -3,10 +3,10 @@
 //! range of global node numbers; elements likewise (DESIGN.md, "Distributed conventions").
 
 use super::node_owner;
+use crate::mesh::ElemKind;
 use crate::model::def::{Constraint, Load, MaterialDef, ModelDef, Settings};
 use crate::parallel::Comm;
 use crate::{Error, Result};
-use crate::mesh::ElemKind;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 
@@ -126,7 +126,11 @@ pub fn split(def: &ModelDef, part: &[u32], ranks: usize) -> Vec<LocalModel> {
         for (i, &n) in owned.iter().chain(ghosts.iter()).enumerate() {
             local_of[n] = i;
         }
-        let coords: Vec<[f64; 3]> = owned.iter().chain(ghosts.iter()).map(|&n| mesh.coords[n]).collect();
+        let coords: Vec<[f64; 3]> = owned
+            .iter()
+            .chain(ghosts.iter())
+            .map(|&n| mesh.coords[n])
+            .collect();
         let mut kinds = Vec::with_capacity(elems_of[r].len());
         let mut offsets = vec![0usize];
         let mut conn = Vec::new();
@@ -142,12 +146,27 @@ pub fn split(def: &ModelDef, part: &[u32], ranks: usize) -> Vec<LocalModel> {
         let node_sets = def
             .node_sets
             .iter()
-            .map(|(k, v)| (k.clone(), v.iter().filter(|&&n| local_of[n] != usize::MAX).map(|&n| local_of[n]).collect()))
+            .map(|(k, v)| {
+                (
+                    k.clone(),
+                    v.iter()
+                        .filter(|&&n| local_of[n] != usize::MAX)
+                        .map(|&n| local_of[n])
+                        .collect(),
+                )
+            })
             .collect();
         let surfaces = def
             .surfaces
             .iter()
-            .map(|(k, v)| (k.clone(), v.iter().filter_map(|f| local_elem.get(&f.elem).map(|&le| (le, f.face))).collect()))
+            .map(|(k, v)| {
+                (
+                    k.clone(),
+                    v.iter()
+                        .filter_map(|f| local_elem.get(&f.elem).map(|&le| (le, f.face)))
+                        .collect(),
+                )
+            })
             .collect();
         out.push(LocalModel {
             rank: r,
@@ -187,7 +206,8 @@ pub fn scatter(comm: &dyn Comm, pieces: Option<Vec<LocalModel>>) -> Result<Local
             let mut send = Vec::new();
             let mut counts = Vec::with_capacity(p);
             for piece in &pieces {
-                let bytes = bincode::serialize(piece).map_err(|e| Error::runtime(format!("serialising a model piece: {e}")))?;
+                let bytes = bincode::serialize(piece)
+                    .map_err(|e| Error::runtime(format!("serialising a model piece: {e}")))?;
                 counts.push(bytes.len());
                 send.extend_from_slice(&bytes);
             }
@@ -197,5 +217,6 @@ pub fn scatter(comm: &dyn Comm, pieces: Option<Vec<LocalModel>>) -> Result<Local
     };
     let recv_counts = comm.alltoall_counts(&counts);
     let recv = comm.alltoallv_bytes(&send, &counts, &recv_counts);
-    bincode::deserialize(&recv).map_err(|e| Error::runtime(format!("receiving this rank's model piece: {e}")))
+    bincode::deserialize(&recv)
+        .map_err(|e| Error::runtime(format!("receiving this rank's model piece: {e}")))
 }

@@ -13,8 +13,13 @@ use crate::{Error, Result};
 pub fn dual_graph(mesh: &Mesh) -> Result<(Vec<i32>, Vec<i32>)> {
     let eptr: Vec<i32> = mesh.offsets.iter().map(|&o| o as i32).collect();
     let eind: Vec<i32> = mesh.conn.iter().map(|&n| n as i32).collect();
-    let ncommon = if mesh.kinds.iter().all(|&k| k == ElemKind::Hex8) { 4 } else { 3 };
-    let dual = metis::mesh_to_dual(&eptr, &eind, ncommon).map_err(|e| Error::runtime(format!("METIS dual graph: {e}")))?;
+    let ncommon = if mesh.kinds.iter().all(|&k| k == ElemKind::Hex8) {
+        4
+    } else {
+        3
+    };
+    let dual = metis::mesh_to_dual(&eptr, &eind, ncommon)
+        .map_err(|e| Error::runtime(format!("METIS dual graph: {e}")))?;
     Ok((dual.xadj().to_vec(), dual.adjncy().to_vec()))
 }
 
@@ -25,7 +30,9 @@ pub fn partition_elements(mesh: &Mesh, nparts: usize) -> Result<Vec<u32>> {
         return Ok(vec![0; ne]);
     }
     if ne < nparts {
-        return Err(Error::input(format!("cannot split {ne} elements over {nparts} ranks: use fewer ranks")));
+        return Err(Error::input(format!(
+            "cannot split {ne} elements over {nparts} ranks: use fewer ranks"
+        )));
     }
     let (mut xadj, mut adjncy) = dual_graph(mesh)?;
     let mut part = vec![0i32; ne];
@@ -89,7 +96,14 @@ pub fn quality(mesh: &Mesh, part: &[u32], nparts: usize) -> Result<Quality> {
     }
     let mean = mesh.n_elems() as f64 / nparts as f64;
     let imbalance = *elements_per_rank.iter().max().unwrap_or(&0) as f64 / mean.max(1e-300);
-    Ok(Quality { ranks: nparts, edge_cut, elements_per_rank, owned_nodes_per_rank, ghost_nodes_per_rank, imbalance })
+    Ok(Quality {
+        ranks: nparts,
+        edge_cut,
+        elements_per_rank,
+        owned_nodes_per_rank,
+        ghost_nodes_per_rank,
+        imbalance,
+    })
 }
 
 /// A node is owned by the lowest rank that has an element touching it (DESIGN.md).
@@ -109,7 +123,16 @@ mod tests {
     use crate::mesh::generate::{box_mesh, BoxSpec};
 
     fn bar() -> Mesh {
-        box_mesh(&BoxSpec { origin: [0.0; 3], size: [8.0, 1.0, 1.0], cells: [16, 2, 2], grading: [1.0; 3], kind: ElemKind::Hex8 }, 0)
+        box_mesh(
+            &BoxSpec {
+                origin: [0.0; 3],
+                size: [8.0, 1.0, 1.0],
+                cells: [16, 2, 2],
+                grading: [1.0; 3],
+                kind: ElemKind::Hex8,
+            },
+            0,
+        )
     }
 
     #[test]
@@ -127,7 +150,16 @@ mod tests {
 
     #[test]
     fn too_many_ranks_is_an_input_error() {
-        let m = box_mesh(&BoxSpec { origin: [0.0; 3], size: [1.0; 3], cells: [1, 1, 1], grading: [1.0; 3], kind: ElemKind::Hex8 }, 0);
+        let m = box_mesh(
+            &BoxSpec {
+                origin: [0.0; 3],
+                size: [1.0; 3],
+                cells: [1, 1, 1],
+                grading: [1.0; 3],
+                kind: ElemKind::Hex8,
+            },
+            0,
+        );
         assert!(partition_elements(&m, 2).is_err());
     }
 }

@@ -20,10 +20,16 @@ fn unique_names<'a>(what: &str, names: impl Iterator<Item = &'a str>) -> Result<
     let mut seen = BTreeSet::new();
     for (i, n) in names.enumerate() {
         if n.is_empty() {
-            return Err(err(format!("{what}[{i}].name"), "expected a non-empty name"));
+            return Err(err(
+                format!("{what}[{i}].name"),
+                "expected a non-empty name",
+            ));
         }
         if !seen.insert(n) {
-            return Err(err(format!("{what}[{i}].name"), format!("`{n}` is defined twice")));
+            return Err(err(
+                format!("{what}[{i}].name"),
+                format!("`{n}` is defined twice"),
+            ));
         }
     }
     Ok(())
@@ -33,7 +39,14 @@ fn known(names: &BTreeMap<String, impl Sized>) -> String {
     if names.is_empty() {
         "none defined".into()
     } else {
-        format!("defined: {}", names.keys().map(|k| k.as_str()).collect::<Vec<_>>().join(", "))
+        format!(
+            "defined: {}",
+            names
+                .keys()
+                .map(|k| k.as_str())
+                .collect::<Vec<_>>()
+                .join(", ")
+        )
     }
 }
 
@@ -53,17 +66,34 @@ pub fn build(deck: &Deck, deck_dir: &Path) -> Result<ModelDef> {
     for (i, m) in deck.materials.iter().enumerate() {
         let f = format!("materials[{i}]");
         if !(m.e > 0.0 && m.e.is_finite()) {
-            return Err(err(format!("{f}.E"), format!("expected a positive modulus, got {}", m.e)));
+            return Err(err(
+                format!("{f}.E"),
+                format!("expected a positive modulus, got {}", m.e),
+            ));
         }
         if !(m.nu > -1.0 && m.nu < 0.5) {
-            return Err(err(format!("{f}.nu"), format!("expected -1 < nu < 0.5, got {}", m.nu)));
+            return Err(err(
+                format!("{f}.nu"),
+                format!("expected -1 < nu < 0.5, got {}", m.nu),
+            ));
         }
         if !(m.density >= 0.0 && m.density.is_finite()) {
-            return Err(err(format!("{f}.density"), format!("expected ≥ 0, got {}", m.density)));
+            return Err(err(
+                format!("{f}.density"),
+                format!("expected ≥ 0, got {}", m.density),
+            ));
         }
         let def = match m.model {
-            MaterialModel::LinearElastic => MaterialDef::LinearElastic { e: m.e, nu: m.nu, density: m.density },
-            MaterialModel::NeoHookean => MaterialDef::NeoHookean { e: m.e, nu: m.nu, density: m.density },
+            MaterialModel::LinearElastic => MaterialDef::LinearElastic {
+                e: m.e,
+                nu: m.nu,
+                density: m.density,
+            },
+            MaterialModel::NeoHookean => MaterialDef::NeoHookean {
+                e: m.e,
+                nu: m.nu,
+                density: m.density,
+            },
         };
         materials.push((m.name.clone(), def));
     }
@@ -81,7 +111,15 @@ pub fn build(deck: &Deck, deck_dir: &Path) -> Result<ModelDef> {
             let names: Vec<&str> = materials.iter().map(|(n, _)| n.as_str()).collect();
             return Err(err(
                 format!("{f}.material"),
-                format!("unknown material `{}` (defined: {})", p.material, if names.is_empty() { "none".into() } else { names.join(", ") }),
+                format!(
+                    "unknown material `{}` (defined: {})",
+                    p.material,
+                    if names.is_empty() {
+                        "none".into()
+                    } else {
+                        names.join(", ")
+                    }
+                ),
             ));
         };
         part_material.push(mi);
@@ -92,7 +130,10 @@ pub fn build(deck: &Deck, deck_dir: &Path) -> Result<ModelDef> {
             if let Err(why) = check_reference(pm.kinds[e], &x0) {
                 return Err(err(
                     format!("{f} `{}`", p.name),
-                    format!("element {e} ({}) is inverted or degenerate: {why}", pm.kinds[e].name()),
+                    format!(
+                        "element {e} ({}) is inverted or degenerate: {why}",
+                        pm.kinds[e].name()
+                    ),
                 ));
             }
         }
@@ -103,9 +144,24 @@ pub fn build(deck: &Deck, deck_dir: &Path) -> Result<ModelDef> {
     let part_index = |field: &str, name: &Option<String>| -> Result<Option<usize>> {
         match name {
             None => Ok(None),
-            Some(n) => deck.parts.iter().position(|p| p.name == *n).map(Some).ok_or_else(|| {
-                err(field, format!("unknown part `{n}` (parts: {})", deck.parts.iter().map(|p| p.name.as_str()).collect::<Vec<_>>().join(", ")))
-            }),
+            Some(n) => deck
+                .parts
+                .iter()
+                .position(|p| p.name == *n)
+                .map(Some)
+                .ok_or_else(|| {
+                    err(
+                        field,
+                        format!(
+                            "unknown part `{n}` (parts: {})",
+                            deck.parts
+                                .iter()
+                                .map(|p| p.name.as_str())
+                                .collect::<Vec<_>>()
+                                .join(", ")
+                        ),
+                    )
+                }),
         }
     };
     let (bmin, bmax) = bounding_box(&mesh);
@@ -118,20 +174,38 @@ pub fn build(deck: &Deck, deck_dir: &Path) -> Result<ModelDef> {
     for (i, s) in deck.node_sets.iter().enumerate() {
         let f = format!("node_sets[{i}]");
         let part = part_index(&format!("{f}.part"), &s.part)?;
-        let chosen = [s.bbox.is_some(), s.group.is_some(), s.nodes.is_some()].iter().filter(|&&b| b).count();
+        let chosen = [s.bbox.is_some(), s.group.is_some(), s.nodes.is_some()]
+            .iter()
+            .filter(|&&b| b)
+            .count();
         if chosen != 1 {
-            return Err(err(&f, format!("`{}`: expected exactly one of `box`, `group`, `nodes`", s.name)));
+            return Err(err(
+                &f,
+                format!(
+                    "`{}`: expected exactly one of `box`, `group`, `nodes`",
+                    s.name
+                ),
+            ));
         }
         let mut nodes: Vec<usize> = if let Some(b) = &s.bbox {
             nodes_in_box(&mesh, b.min, b.max, tol)
         } else if let Some(g) = &s.group {
             mesh.node_groups.get(g).cloned().ok_or_else(|| {
-                err(format!("{f}.group"), format!("unknown mesh group `{g}` ({})", known(&mesh.node_groups)))
+                err(
+                    format!("{f}.group"),
+                    format!("unknown mesh group `{g}` ({})", known(&mesh.node_groups)),
+                )
             })?
         } else {
             let list = s.nodes.clone().unwrap();
             if let Some(&bad) = list.iter().find(|&&n| n >= mesh.n_nodes()) {
-                return Err(err(format!("{f}.nodes"), format!("node {bad} does not exist (the mesh has {} nodes)", mesh.n_nodes())));
+                return Err(err(
+                    format!("{f}.nodes"),
+                    format!(
+                        "node {bad} does not exist (the mesh has {} nodes)",
+                        mesh.n_nodes()
+                    ),
+                ));
             }
             list
         };
@@ -141,7 +215,13 @@ pub fn build(deck: &Deck, deck_dir: &Path) -> Result<ModelDef> {
         nodes.sort_unstable();
         nodes.dedup();
         if nodes.is_empty() {
-            return Err(err(&f, format!("node set `{}` selects no nodes (the mesh spans {:?} to {:?})", s.name, bmin, bmax)));
+            return Err(err(
+                &f,
+                format!(
+                    "node set `{}` selects no nodes (the mesh spans {:?} to {:?})",
+                    s.name, bmin, bmax
+                ),
+            ));
         }
         node_sets.insert(s.name.clone(), nodes);
     }
@@ -154,15 +234,26 @@ pub fn build(deck: &Deck, deck_dir: &Path) -> Result<ModelDef> {
         let mut faces: Vec<FaceRef> = match (&s.bbox, &s.group) {
             (Some(b), None) => faces_in_box(&mesh, &boundary, b.min, b.max, tol),
             (None, Some(g)) => mesh.face_groups.get(g).cloned().ok_or_else(|| {
-                err(format!("{f}.group"), format!("unknown surface group `{g}` ({})", known(&mesh.face_groups)))
+                err(
+                    format!("{f}.group"),
+                    format!("unknown surface group `{g}` ({})", known(&mesh.face_groups)),
+                )
             })?,
-            _ => return Err(err(&f, format!("`{}`: expected exactly one of `box`, `group`", s.name))),
+            _ => {
+                return Err(err(
+                    &f,
+                    format!("`{}`: expected exactly one of `box`, `group`", s.name),
+                ))
+            }
         };
         if let Some(p) = part {
             faces.retain(|fr| mesh.elem_part[fr.elem] as usize == p);
         }
         if faces.is_empty() {
-            return Err(err(&f, format!("surface `{}` selects no boundary faces", s.name)));
+            return Err(err(
+                &f,
+                format!("surface `{}` selects no boundary faces", s.name),
+            ));
         }
         surfaces.insert(s.name.clone(), faces);
     }
@@ -174,25 +265,45 @@ pub fn build(deck: &Deck, deck_dir: &Path) -> Result<ModelDef> {
         if c.points.is_empty() {
             return Err(err(f, "expected at least one [t, value] point"));
         }
-        if c.points.iter().any(|p| !p[0].is_finite() || !p[1].is_finite()) {
+        if c.points
+            .iter()
+            .any(|p| !p[0].is_finite() || !p[1].is_finite())
+        {
             return Err(err(f, "expected finite numbers"));
         }
         if c.points.windows(2).any(|w| w[1][0] <= w[0][0]) {
             return Err(err(f, "expected strictly increasing times"));
         }
-        curves.insert(c.name.clone(), Curve { points: c.points.clone() });
+        curves.insert(
+            c.name.clone(),
+            Curve {
+                points: c.points.clone(),
+            },
+        );
     }
     let a = &deck.analysis;
     if !(a.end_time > 0.0 && a.end_time.is_finite()) {
-        return Err(err("analysis.end_time", format!("expected a positive time, got {}", a.end_time)));
+        return Err(err(
+            "analysis.end_time",
+            format!("expected a positive time, got {}", a.end_time),
+        ));
     }
     if !(a.step > 0.0 && a.step <= a.end_time) {
-        return Err(err("analysis.step", format!("expected 0 < step ≤ end_time ({}), got {}", a.end_time, a.step)));
+        return Err(err(
+            "analysis.step",
+            format!(
+                "expected 0 < step ≤ end_time ({}), got {}",
+                a.end_time, a.step
+            ),
+        ));
     }
     let curve = |field: String, name: &Option<String>| -> Result<Curve> {
         match name {
             None => Ok(Curve::ramp(a.end_time)),
-            Some(n) => curves.get(n).cloned().ok_or_else(|| err(field, format!("unknown curve `{n}` ({})", known(&curves)))),
+            Some(n) => curves
+                .get(n)
+                .cloned()
+                .ok_or_else(|| err(field, format!("unknown curve `{n}` ({})", known(&curves)))),
         }
     };
     // A boundary condition or nodal load may name a node set or a surface (its nodes).
@@ -203,7 +314,14 @@ pub fn build(deck: &Deck, deck_dir: &Path) -> Result<ModelDef> {
         if let Some(fs) = surfaces.get(name) {
             return Ok(nodes_of_faces(&mesh, fs));
         }
-        Err(err(field, format!("unknown node set `{name}` (node sets: {}; surfaces: {})", known(&node_sets), known(&surfaces))))
+        Err(err(
+            field,
+            format!(
+                "unknown node set `{name}` (node sets: {}; surfaces: {})",
+                known(&node_sets),
+                known(&surfaces)
+            ),
+        ))
     };
 
     // Constraints.
@@ -214,8 +332,15 @@ pub fn build(deck: &Deck, deck_dir: &Path) -> Result<ModelDef> {
         let nodes = set_nodes(format!("{f}.set"), b.set())?;
         resolved_sets.insert(b.set().to_string(), nodes);
         let (comps_list, value, crv) = match b {
-            BoundaryDeck::Fixed { components, .. } => (components.clone(), 0.0, Curve::ramp(a.end_time)),
-            BoundaryDeck::Displacement { components, value, curve: c, .. } => {
+            BoundaryDeck::Fixed { components, .. } => {
+                (components.clone(), 0.0, Curve::ramp(a.end_time))
+            }
+            BoundaryDeck::Displacement {
+                components,
+                value,
+                curve: c,
+                ..
+            } => {
                 if !value.is_finite() {
                     return Err(err(format!("{f}.value"), "expected a finite number"));
                 }
@@ -223,7 +348,10 @@ pub fn build(deck: &Deck, deck_dir: &Path) -> Result<ModelDef> {
             }
         };
         if comps_list.is_empty() {
-            return Err(err(format!("{f}.components"), "expected at least one of \"x\", \"y\", \"z\""));
+            return Err(err(
+                format!("{f}.components"),
+                "expected at least one of \"x\", \"y\", \"z\"",
+            ));
         }
         let mut comps = [false; 3];
         let mut val = [0.0; 3];
@@ -232,7 +360,12 @@ pub fn build(deck: &Deck, deck_dir: &Path) -> Result<ModelDef> {
             comps[k] = true;
             val[k] = value;
         }
-        constraints.push(Constraint { set: b.set().to_string(), comps, value: val, curve: crv });
+        constraints.push(Constraint {
+            set: b.set().to_string(),
+            comps,
+            value: val,
+            curve: crv,
+        });
     }
 
     // Loads.
@@ -250,27 +383,54 @@ pub fn build(deck: &Deck, deck_dir: &Path) -> Result<ModelDef> {
             if surfaces.contains_key(s) {
                 Ok(())
             } else {
-                Err(err(format!("{f}.surface"), format!("unknown surface `{s}` ({})", known(&surfaces))))
+                Err(err(
+                    format!("{f}.surface"),
+                    format!("unknown surface `{s}` ({})", known(&surfaces)),
+                ))
             }
         };
         loads.push(match l {
-            LoadDeck::Nodal { set, force, curve: c } => {
+            LoadDeck::Nodal {
+                set,
+                force,
+                curve: c,
+            } => {
                 finite3(force, "force")?;
                 let nodes = set_nodes(format!("{f}.set"), set)?;
                 resolved_sets.insert(set.clone(), nodes);
-                Load::Nodal { set: set.clone(), force: *force, curve: curve(format!("{f}.curve"), c)? }
+                Load::Nodal {
+                    set: set.clone(),
+                    force: *force,
+                    curve: curve(format!("{f}.curve"), c)?,
+                }
             }
-            LoadDeck::Traction { surface: s, traction, curve: c } => {
+            LoadDeck::Traction {
+                surface: s,
+                traction,
+                curve: c,
+            } => {
                 finite3(traction, "traction")?;
                 surface(s)?;
-                Load::Traction { surface: s.clone(), traction: *traction, curve: curve(format!("{f}.curve"), c)? }
+                Load::Traction {
+                    surface: s.clone(),
+                    traction: *traction,
+                    curve: curve(format!("{f}.curve"), c)?,
+                }
             }
-            LoadDeck::Pressure { surface: s, pressure, curve: c } => {
+            LoadDeck::Pressure {
+                surface: s,
+                pressure,
+                curve: c,
+            } => {
                 if !pressure.is_finite() {
                     return Err(err(format!("{f}.pressure"), "expected a finite number"));
                 }
                 surface(s)?;
-                Load::Pressure { surface: s.clone(), pressure: *pressure, curve: curve(format!("{f}.curve"), c)? }
+                Load::Pressure {
+                    surface: s.clone(),
+                    pressure: *pressure,
+                    curve: curve(format!("{f}.curve"), c)?,
+                }
             }
         });
     }
@@ -280,13 +440,23 @@ pub fn build(deck: &Deck, deck_dir: &Path) -> Result<ModelDef> {
     if s.max_iterations == 0 {
         return Err(err("solver.max_iterations", "expected at least 1"));
     }
-    for (name, v) in [("solver.residual_rtol", s.residual_rtol), ("solver.increment_rtol", s.increment_rtol), ("solver.linear.rtol", s.linear.rtol)] {
+    for (name, v) in [
+        ("solver.residual_rtol", s.residual_rtol),
+        ("solver.increment_rtol", s.increment_rtol),
+        ("solver.linear.rtol", s.linear.rtol),
+    ] {
         if !(v > 0.0 && v < 1.0) {
-            return Err(err(name, format!("expected a tolerance in (0, 1), got {v}")));
+            return Err(err(
+                name,
+                format!("expected a tolerance in (0, 1), got {v}"),
+            ));
         }
     }
     if s.linear.restart == 0 || s.linear.max_iterations == 0 {
-        return Err(err("solver.linear", "expected restart ≥ 1 and max_iterations ≥ 1"));
+        return Err(err(
+            "solver.linear",
+            "expected restart ≥ 1 and max_iterations ≥ 1",
+        ));
     }
     if deck.output.every == 0 {
         return Err(err("output.every", "expected at least 1"));
@@ -332,24 +502,49 @@ pub fn build(deck: &Deck, deck_dir: &Path) -> Result<ModelDef> {
 
 fn part_mesh(m: &MeshDeck, f: &str, part: u32, deck_dir: &Path) -> Result<Mesh> {
     match m {
-        MeshDeck::Box { origin, size, cells, grading, element, distort } => {
+        MeshDeck::Box {
+            origin,
+            size,
+            cells,
+            grading,
+            element,
+            distort,
+        } => {
             if size.iter().any(|&s| !(s > 0.0 && s.is_finite())) {
-                return Err(err(format!("{f}.mesh.size"), format!("expected three positive lengths, got {size:?}")));
+                return Err(err(
+                    format!("{f}.mesh.size"),
+                    format!("expected three positive lengths, got {size:?}"),
+                ));
             }
             if cells.iter().any(|&c| c == 0) {
-                return Err(err(format!("{f}.mesh.cells"), format!("expected three counts ≥ 1, got {cells:?}")));
+                return Err(err(
+                    format!("{f}.mesh.cells"),
+                    format!("expected three counts ≥ 1, got {cells:?}"),
+                ));
             }
             if grading.iter().any(|&g| !(g > 0.0 && g.is_finite())) {
-                return Err(err(format!("{f}.mesh.grading"), format!("expected positive ratios, got {grading:?}")));
+                return Err(err(
+                    format!("{f}.mesh.grading"),
+                    format!("expected positive ratios, got {grading:?}"),
+                ));
             }
             if !(0.0..=0.3).contains(distort) {
-                return Err(err(format!("{f}.mesh.distort"), format!("expected 0 ≤ distort ≤ 0.3, got {distort}")));
+                return Err(err(
+                    format!("{f}.mesh.distort"),
+                    format!("expected 0 ≤ distort ≤ 0.3, got {distort}"),
+                ));
             }
             let kind = match element {
                 ElementDeck::Hex8 => ElemKind::Hex8,
                 ElementDeck::Tet4 => ElemKind::Tet4,
             };
-            let spec = BoxSpec { origin: *origin, size: *size, cells: *cells, grading: *grading, kind };
+            let spec = BoxSpec {
+                origin: *origin,
+                size: *size,
+                cells: *cells,
+                grading: *grading,
+                kind,
+            };
             let mut mesh = box_mesh(&spec, part);
             if *distort > 0.0 {
                 distort_interior(&mut mesh, *distort, 12345);
@@ -357,13 +552,29 @@ fn part_mesh(m: &MeshDeck, f: &str, part: u32, deck_dir: &Path) -> Result<Mesh> 
             Ok(mesh)
         }
         MeshDeck::Gmsh { file } => {
-            let path = if Path::new(file).is_absolute() { Path::new(file).to_path_buf() } else { deck_dir.join(file) };
-            let text = std::fs::read_to_string(&path)
-                .map_err(|e| err(format!("{f}.mesh.file"), format!("cannot read `{}`: {e}", path.display())))?;
-            let mut mesh = gmsh::read_msh(&text, part).map_err(|e| err(format!("{f}.mesh.file"), format!("`{}`: {e}", path.display())))?;
+            let path = if Path::new(file).is_absolute() {
+                Path::new(file).to_path_buf()
+            } else {
+                deck_dir.join(file)
+            };
+            let text = std::fs::read_to_string(&path).map_err(|e| {
+                err(
+                    format!("{f}.mesh.file"),
+                    format!("cannot read `{}`: {e}", path.display()),
+                )
+            })?;
+            let mut mesh = gmsh::read_msh(&text, part).map_err(|e| {
+                err(
+                    format!("{f}.mesh.file"),
+                    format!("`{}`: {e}", path.display()),
+                )
+            })?;
             compact_unused_nodes(&mut mesh);
             if mesh.n_elems() == 0 {
-                return Err(err(format!("{f}.mesh.file"), format!("`{}` has no hex8 or tet4 elements", path.display())));
+                return Err(err(
+                    format!("{f}.mesh.file"),
+                    format!("`{}` has no hex8 or tet4 elements", path.display()),
+                ));
             }
             Ok(mesh)
         }
@@ -393,6 +604,10 @@ fn compact_unused_nodes(mesh: &mut Mesh) {
         *n = map[*n];
     }
     for v in mesh.node_groups.values_mut() {
-        *v = v.iter().filter(|&&n| map[n] != usize::MAX).map(|&n| map[n]).collect();
+        *v = v
+            .iter()
+            .filter(|&&n| map[n] != usize::MAX)
+            .map(|&n| map[n])
+            .collect();
     }
 }

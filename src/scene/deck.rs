@@ -369,7 +369,10 @@ fn one() -> usize {
 
 impl Default for OutputDeck {
     fn default() -> Self {
-        Self { every: 1, reactions: None }
+        Self {
+            every: 1,
+            reactions: None,
+        }
     }
 }
 
@@ -379,7 +382,9 @@ pub fn parse(text: &str) -> Result<Deck, String> {
     serde_path_to_error::deserialize(de).map_err(|e| {
         let path = e.path().to_string();
         let inner = e.into_inner();
-        let line = inner.span().map(|s| text[..s.start.min(text.len())].lines().count().max(1));
+        let line = inner
+            .span()
+            .map(|s| text[..s.start.min(text.len())].lines().count().max(1));
         let msg = inner.message().trim().replace('\n', " ");
         let at = line.map(|l| format!(" (line {l})")).unwrap_or_default();
         if path.is_empty() || path == "." {
@@ -419,7 +424,9 @@ step = 0.5
         assert_eq!(d.solver.max_iterations, 25);
         assert_eq!(d.output.every, 1);
         match &d.parts[0].mesh {
-            MeshDeck::Box { grading, element, .. } => {
+            MeshDeck::Box {
+                grading, element, ..
+            } => {
                 assert_eq!(*grading, [1.0; 3]);
                 assert_eq!(*element, ElementDeck::Hex8);
             }

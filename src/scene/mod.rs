@@ -47,14 +47,32 @@ pub struct Source {
 /// Resolve a built-in scene name or a deck path.
 pub fn load(name_or_path: &str) -> Result<Source> {
     if let Some((name, _, text)) = BUILTIN.iter().find(|(n, _, _)| *n == name_or_path) {
-        return Ok(Source { text: text.to_string(), dir: PathBuf::from("."), label: name.to_string() });
+        return Ok(Source {
+            text: text.to_string(),
+            dir: PathBuf::from("."),
+            label: name.to_string(),
+        });
     }
     let p = Path::new(name_or_path);
     if p.is_file() {
         let text = std::fs::read_to_string(p)
             .map_err(|e| Error::input(format!("cannot read deck `{}`: {e}", p.display())))?;
-        let dir = p.parent().map(|d| if d.as_os_str().is_empty() { Path::new(".") } else { d }).unwrap_or(Path::new(".")).to_path_buf();
-        return Ok(Source { text, dir, label: p.display().to_string() });
+        let dir = p
+            .parent()
+            .map(|d| {
+                if d.as_os_str().is_empty() {
+                    Path::new(".")
+                } else {
+                    d
+                }
+            })
+            .unwrap_or(Path::new("."))
+            .to_path_buf();
+        return Ok(Source {
+            text,
+            dir,
+            label: p.display().to_string(),
+        });
     }
     let names: Vec<&str> = BUILTIN.iter().map(|(n, _, _)| *n).collect();
     Err(Error::input(format!(
@@ -65,7 +83,8 @@ pub fn load(name_or_path: &str) -> Result<Source> {
 
 /// Parse, build and validate a scene.
 pub fn model(src: &Source) -> Result<crate::model::def::ModelDef> {
-    let deck = deck::parse(&src.text).map_err(|e| Error::input(format!("deck {}: {e}", src.label)))?;
+    let deck =
+        deck::parse(&src.text).map_err(|e| Error::input(format!("deck {}: {e}", src.label)))?;
     build::build(&deck, &src.dir).map_err(|e| e.context(format!("deck {}", src.label)))
 }
 

@@ -58,7 +58,9 @@ pub struct RunTotals {
 /// The pseudo-times of the steps.
 pub fn step_times(end: f64, dt: f64) -> Vec<f64> {
     let n = ((end / dt) - 1e-9).ceil().max(1.0) as usize;
-    (1..=n).map(|i| if i == n { end } else { i as f64 * dt }).collect()
+    (1..=n)
+        .map(|i| if i == n { end } else { i as f64 * dt })
+        .collect()
 }
 
 /// Run the static analysis; `on_step` sees every converged step with the solution.
@@ -82,7 +84,9 @@ pub fn run_static(
         let mut trial = u.clone();
         let stats = {
             let mut prob = StaticProblem { model, time: t };
-            newton(comm, &mut prob, &mut trial, &mut r, &g, &mut k, &mut pc, opts)?
+            newton(
+                comm, &mut prob, &mut trial, &mut r, &g, &mut k, &mut pc, opts,
+            )?
         };
         tot.nonlinear_iterations += stats.iterations;
         tot.linear_iterations += stats.linear_iterations;
@@ -91,7 +95,11 @@ pub fn run_static(
         tot.seconds_assembly += stats.seconds_assembly;
         tot.seconds_linear += stats.seconds_linear;
         if !stats.converged {
-            tot.failure = Some(format!("step {} (t = {t}) did not converge: {}", i + 1, stats.reason));
+            tot.failure = Some(format!(
+                "step {} (t = {t}) did not converge: {}",
+                i + 1,
+                stats.reason
+            ));
             return Ok(tot);
         }
         model.commit();

@@ -80,11 +80,17 @@ pub fn newton(
         let (rn, gap, un) = (sums[0].sqrt(), sums[1].sqrt(), sums[2].sqrt());
         let rel = if f_ref > 0.0 { rn / f_ref } else { rn };
         st.residual_history.push(rel);
-        if first.is_nan() {
-            first = rn.max(f64::MIN_POSITIVE);
+        // Divergence is judged against the first non-trivial scale of the step (a step
+        // driven only by prescribed displacements starts from a zero residual).
+        if first.is_nan() && rn.max(f_ref) > 0.0 {
+            first = rn.max(f_ref);
         }
         let small_r = rn <= opts.residual_rtol * f_ref;
-        let small_du = if it == 0 { true } else { last_du <= opts.increment_rtol * un };
+        let small_du = if it == 0 {
+            true
+        } else {
+            last_du <= opts.increment_rtol * un
+        };
         if small_r && small_du && gap == 0.0 {
             st.converged = true;
             return Ok(st);
@@ -93,12 +99,15 @@ pub fn newton(
             st.reason = "the residual is not finite".into();
             return Ok(st);
         }
-        if rn > DIVERGENCE_FACTOR * first && it > 0 {
+        if it > 0 && !first.is_nan() && rn > DIVERGENCE_FACTOR * first {
             st.reason = format!("diverged: residual grew from {first:.3e} to {rn:.3e}");
             return Ok(st);
         }
         if it == opts.max_iterations {
-            st.reason = format!("no convergence in {} iterations (relative residual {rel:.3e})", opts.max_iterations);
+            st.reason = format!(
+                "no convergence in {} iterations (relative residual {rel:.3e})",
+                opts.max_iterations
+            );
             return Ok(st);
         }
         // Jacobian and the linear solve K Δu = −r with Δu_c = g − u_c.
