@@ -168,7 +168,10 @@ pub fn bench_linear(
                 .to_path_buf()
         })
         .unwrap_or_else(std::env::temp_dir);
-    let h5path = dir.join(format!("bench-linear-{}.h5", std::process::id()));
+    // Every rank must open the same file: rank 0 names it.
+    let mut name = format!("bench-linear-{}.h5", std::process::id()).into_bytes();
+    comm.broadcast_bytes(0, &mut name);
+    let h5path = dir.join(String::from_utf8_lossy(&name).to_string());
     let stress = vec![1.0f64; 6 * model.local.n_elems()];
     comm.barrier();
     let t = Instant::now();
