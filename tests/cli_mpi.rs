@@ -22,27 +22,44 @@ fn alfe(dir: &Path, ranks: usize, args: &[&str]) -> Output {
         cmd.args(["mpirun", "--oversubscribe", "-n", &ranks.to_string()]);
     }
     cmd.arg(ALFE).args(args).current_dir(dir);
-    cmd.env("OMPI_ALLOW_RUN_AS_ROOT", "1").env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1");
+    cmd.env("OMPI_ALLOW_RUN_AS_ROOT", "1")
+        .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1");
     // Waiting ranks yield the core instead of spinning (the machine may be shared).
     cmd.env("OMPI_MCA_mpi_yield_when_idle", "1");
     let out = cmd.output().expect("cannot launch alfe");
-    assert_ne!(out.status.code(), Some(124), "alfe {args:?} on {ranks} ranks hung (killed after 180 s)");
+    assert_ne!(
+        out.status.code(),
+        Some(124),
+        "alfe {args:?} on {ranks} ranks hung (killed after 180 s)"
+    );
     out
 }
 
 fn text(o: &Output) -> (String, String) {
-    (String::from_utf8_lossy(&o.stdout).to_string(), String::from_utf8_lossy(&o.stderr).to_string())
+    (
+        String::from_utf8_lossy(&o.stdout).to_string(),
+        String::from_utf8_lossy(&o.stderr).to_string(),
+    )
 }
 
 fn ok(o: Output) -> String {
     let (so, se) = text(&o);
-    assert!(o.status.success(), "alfe failed ({:?}):\n{so}\n{se}", o.status.code());
+    assert!(
+        o.status.success(),
+        "alfe failed ({:?}):\n{so}\n{se}",
+        o.status.code()
+    );
     so
 }
 
 /// Python with Debian's h5py (SETUP pitfall 7: /usr/bin/python3, not the pyenv one).
 fn python(script: &str, args: &[&str]) -> String {
-    let o = Command::new("/usr/bin/python3").arg("-c").arg(script).args(args).output().expect("cannot run /usr/bin/python3");
+    let o = Command::new("/usr/bin/python3")
+        .arg("-c")
+        .arg(script)
+        .args(args)
+        .output()
+        .expect("cannot run /usr/bin/python3");
     let (so, se) = text(&o);
     assert!(o.status.success(), "python failed:\n{so}\n{se}");
     so
@@ -67,7 +84,11 @@ fn read_u(h5: &Path) -> serde_json::Value {
 }
 
 fn history(path: &Path) -> Vec<Vec<String>> {
-    std::fs::read_to_string(path).unwrap().lines().map(|l| l.split(',').map(|s| s.to_string()).collect()).collect()
+    std::fs::read_to_string(path)
+        .unwrap()
+        .lines()
+        .map(|l| l.split(',').map(|s| s.to_string()).collect())
+        .collect()
 }
 
 /// Compare two runs: displacements to 1e-8 relative (against the largest), the same
@@ -76,20 +97,57 @@ fn assert_same_runs(a: &Path, b: &Path, scene: &str) {
     let ua = read_u(&a.join(format!("{scene}.h5")));
     let ub = read_u(&b.join(format!("{scene}.h5")));
     let (oa, ob) = (ua.as_object().unwrap(), ub.as_object().unwrap());
-    assert_eq!(oa.keys().collect::<Vec<_>>(), ob.keys().collect::<Vec<_>>(), "different output steps");
+    assert_eq!(
+        oa.keys().collect::<Vec<_>>(),
+        ob.keys().collect::<Vec<_>>(),
+        "different output steps"
+    );
     for (k, va) in oa {
-        let fa: Vec<f64> = va.as_array().unwrap().iter().flat_map(|r| r.as_array().unwrap().iter().map(|x| x.as_f64().unwrap())).collect();
-        let fb: Vec<f64> = ob[k].as_array().unwrap().iter().flat_map(|r| r.as_array().unwrap().iter().map(|x| x.as_f64().unwrap())).collect();
+        let fa: Vec<f64> = va
+            .as_array()
+            .unwrap()
+            .iter()
+            .flat_map(|r| r.as_array().unwrap().iter().map(|x| x.as_f64().unwrap()))
+            .collect();
+        let fb: Vec<f64> = ob[k]
+            .as_array()
+            .unwrap()
+            .iter()
+            .flat_map(|r| r.as_array().unwrap().iter().map(|x| x.as_f64().unwrap()))
+            .collect();
         let scale = fa.iter().map(|x| x.abs()).fold(0.0, f64::max);
-        let diff = fa.iter().zip(&fb).map(|(x, y)| (x - y).abs()).fold(0.0, f64::max);
-        assert!(scale > 0.0 && diff <= 1e-8 * scale, "step {k}: displacements differ by {diff:e} (max |u| {scale:e})");
+        let diff = fa
+            .iter()
+            .zip(&fb)
+            .map(|(x, y)| (x - y).abs())
+            .fold(0.0, f64::max);
+        assert!(
+            scale > 0.0 && diff <= 1e-8 * scale,
+            "step {k}: displacements differ by {diff:e} (max |u| {scale:e})"
+        );
     }
-    let (ha, hb) = (history(&a.join("history.csv")), history(&b.join("history.csv")));
+    let (ha, hb) = (
+        history(&a.join("history.csv")),
+        history(&b.join("history.csv")),
+    );
     assert_eq!(ha[0], hb[0], "history columns differ");
     assert_eq!(ha.len(), hb.len());
-    let col = |h: &Vec<Vec<String>>, name: &str| ha[0].iter().position(|c| c == name).map(|i| h.iter().skip(1).map(|r| r[i].clone()).collect::<Vec<_>>()).unwrap();
-    assert_eq!(col(&ha, "nonlinear_iterations"), col(&hb, "nonlinear_iterations"), "Newton iteration counts differ");
-    for name in ha[0].iter().filter(|c| c.ends_with(".fx") || c.ends_with(".fy") || c.ends_with(".fz")) {
+    let col = |h: &Vec<Vec<String>>, name: &str| {
+        ha[0]
+            .iter()
+            .position(|c| c == name)
+            .map(|i| h.iter().skip(1).map(|r| r[i].clone()).collect::<Vec<_>>())
+            .unwrap()
+    };
+    assert_eq!(
+        col(&ha, "nonlinear_iterations"),
+        col(&hb, "nonlinear_iterations"),
+        "Newton iteration counts differ"
+    );
+    for name in ha[0]
+        .iter()
+        .filter(|c| c.ends_with(".fx") || c.ends_with(".fy") || c.ends_with(".fz"))
+    {
         let (ra, rb) = (col(&ha, name), col(&hb, name));
         let fa: Vec<f64> = ra.iter().map(|s| s.parse().unwrap()).collect();
         let fb: Vec<f64> = rb.iter().map(|s| s.parse().unwrap()).collect();
@@ -107,38 +165,103 @@ fn cantilever_same_on_one_and_two_ranks_with_clamp_and_load_on_different_ranks()
     let check = ok(alfe(&dir, 1, &["check", "cantilever", "--ranks", "2"]));
     assert!(check.contains("set clamp owned by rank(s) 0"), "{check}");
     assert!(check.contains("surface tip on rank(s) 1"), "{check}");
-    ok(alfe(&dir, 1, &["run", "cantilever", "--out", "r1", "--quiet"]));
-    let two = ok(alfe(&dir, 2, &["run", "cantilever", "--out", "r2", "--partitions", "parts"]));
-    assert!(two.contains("step   10/10"), "progress lines expected on rank 0 only once:\n{two}");
+    ok(alfe(
+        &dir,
+        1,
+        &["run", "cantilever", "--out", "r1", "--quiet"],
+    ));
+    let two = ok(alfe(
+        &dir,
+        2,
+        &["run", "cantilever", "--out", "r2", "--partitions", "parts"],
+    ));
+    assert!(
+        two.contains("step   10/10"),
+        "progress lines expected on rank 0 only once:\n{two}"
+    );
     assert_eq!(two.matches("step    1/10").count(), 1, "{two}");
     assert_same_runs(&dir.join("r1"), &dir.join("r2"), "cantilever");
-    let s: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(dir.join("r2/summary.json")).unwrap()).unwrap();
+    let s: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("r2/summary.json")).unwrap())
+            .unwrap();
     assert_eq!(s["ranks"], 2);
     assert_eq!(s["converged"], true);
     assert_eq!(s["steps"], 10);
     assert_eq!(s["partition"], "computed");
-    for key in ["nonlinear_iterations", "linear_iterations", "retries", "wall_time_s", "peak_rss_mb"] {
+    for key in [
+        "nonlinear_iterations",
+        "linear_iterations",
+        "retries",
+        "wall_time_s",
+        "peak_rss_mb",
+    ] {
         assert!(s[key].is_number(), "summary.json lacks {key}");
     }
     // A second run uses the cached partition.
-    ok(alfe(&dir, 2, &["run", "cantilever", "--out", "r3", "--partitions", "parts", "--quiet"]));
-    let s3: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(dir.join("r3/summary.json")).unwrap()).unwrap();
+    ok(alfe(
+        &dir,
+        2,
+        &[
+            "run",
+            "cantilever",
+            "--out",
+            "r3",
+            "--partitions",
+            "parts",
+            "--quiet",
+        ],
+    ));
+    let s3: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("r3/summary.json")).unwrap())
+            .unwrap();
     assert_eq!(s3["partition"], "cache");
 }
 
 #[test]
 fn prescribed_stretch_same_on_one_and_two_ranks() {
     let dir = temp_dir("rank-stretch");
-    ok(alfe(&dir, 1, &["run", "cube-stretch", "--out", "r1", "--quiet"]));
-    ok(alfe(&dir, 2, &["run", "cube-stretch", "--out", "r2", "--partitions", "parts", "--quiet"]));
+    ok(alfe(
+        &dir,
+        1,
+        &["run", "cube-stretch", "--out", "r1", "--quiet"],
+    ));
+    ok(alfe(
+        &dir,
+        2,
+        &[
+            "run",
+            "cube-stretch",
+            "--out",
+            "r2",
+            "--partitions",
+            "parts",
+            "--quiet",
+        ],
+    ));
     assert_same_runs(&dir.join("r1"), &dir.join("r2"), "cube-stretch");
 }
 
 #[test]
 fn tet_patch_same_on_one_and_two_ranks() {
     let dir = temp_dir("rank-tet");
-    ok(alfe(&dir, 1, &["run", "patch-tet4", "--out", "r1", "--quiet"]));
-    ok(alfe(&dir, 2, &["run", "patch-tet4", "--out", "r2", "--partitions", "parts", "--quiet"]));
+    ok(alfe(
+        &dir,
+        1,
+        &["run", "patch-tet4", "--out", "r1", "--quiet"],
+    ));
+    ok(alfe(
+        &dir,
+        2,
+        &[
+            "run",
+            "patch-tet4",
+            "--out",
+            "r2",
+            "--partitions",
+            "parts",
+            "--quiet",
+        ],
+    ));
     assert_same_runs(&dir.join("r1"), &dir.join("r2"), "patch-tet4");
 }
 
@@ -147,8 +270,21 @@ fn tet_patch_same_on_one_and_two_ranks() {
 #[test]
 fn gmres_block_jacobi_two_ranks_59k_unknowns() {
     let dir = temp_dir("gmres59k");
-    ok(alfe(&dir, 2, &["bench-linear", "--cells", "26,26,26", "--rtol", "1e-8", "--json", "b.json"]));
-    let b: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(dir.join("b.json")).unwrap()).unwrap();
+    ok(alfe(
+        &dir,
+        2,
+        &[
+            "bench-linear",
+            "--cells",
+            "26,26,26",
+            "--rtol",
+            "1e-8",
+            "--json",
+            "b.json",
+        ],
+    ));
+    let b: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("b.json")).unwrap()).unwrap();
     assert_eq!(b["ranks"], 2);
     assert!(b["unknowns"].as_u64().unwrap() >= 50_000, "{b}");
     assert_eq!(b["gmres_converged"], true);
@@ -158,7 +294,10 @@ fn gmres_block_jacobi_two_ranks_59k_unknowns() {
     assert!(true_rel <= 1e-8 * 1.001, "true residual {true_rel:e}");
     // At most 2 reductions per iteration, plus restarts and set-up.
     let red = b["gmres_reductions"].as_u64().unwrap();
-    assert!(red <= 2 * its + its / 60 + 8, "{red} reductions for {its} iterations");
+    assert!(
+        red <= 2 * its + its / 60 + 8,
+        "{red} reductions for {its} iterations"
+    );
 }
 
 /// The HDF5 file holds what the README promises, with the shapes of the mesh, and the
@@ -166,7 +305,19 @@ fn gmres_block_jacobi_two_ranks_59k_unknowns() {
 #[test]
 fn hdf5_and_xdmf_layout() {
     let dir = temp_dir("h5layout");
-    ok(alfe(&dir, 2, &["run", "cantilever", "--out", "o", "--partitions", "parts", "--quiet"]));
+    ok(alfe(
+        &dir,
+        2,
+        &[
+            "run",
+            "cantilever",
+            "--out",
+            "o",
+            "--partitions",
+            "parts",
+            "--quiet",
+        ],
+    ));
     let script = r#"
 import h5py, sys, json
 import xml.etree.ElementTree as ET
@@ -184,11 +335,21 @@ xtimes = [float(g.find("Time").get("Value")) for g in grids]
 names = sorted(a.get("Name") for a in grids[-1].findall("Attribute"))
 print(json.dumps(dict(shapes=shapes, steps=len(steps), fields=fields, times=times, parts=parts, ids_ok=ids == list(range(len(ids))), xtimes=xtimes, names=names, scene=f.attrs["scene"].decode() if isinstance(f.attrs["scene"], bytes) else str(f.attrs["scene"]))))
 "#;
-    let v: serde_json::Value = serde_json::from_str(&python(script, &[dir.join("o").to_str().unwrap()])).unwrap();
-    assert_eq!(v["shapes"]["mesh/coordinates"], serde_json::json!([1025, 3]));
-    assert_eq!(v["shapes"]["mesh/connectivity"], serde_json::json!([640, 8]));
+    let v: serde_json::Value =
+        serde_json::from_str(&python(script, &[dir.join("o").to_str().unwrap()])).unwrap();
+    assert_eq!(
+        v["shapes"]["mesh/coordinates"],
+        serde_json::json!([1025, 3])
+    );
+    assert_eq!(
+        v["shapes"]["mesh/connectivity"],
+        serde_json::json!([640, 8])
+    );
     assert_eq!(v["shapes"]["mesh/partition"], serde_json::json!([640]));
-    assert_eq!(v["shapes"]["mesh/original_node_id"], serde_json::json!([1025]));
+    assert_eq!(
+        v["shapes"]["mesh/original_node_id"],
+        serde_json::json!([1025])
+    );
     assert_eq!(v["steps"], 10);
     assert_eq!(v["fields"]["displacement"], serde_json::json!([1025, 3]));
     assert_eq!(v["fields"]["stress"], serde_json::json!([640, 6]));
@@ -197,7 +358,16 @@ print(json.dumps(dict(shapes=shapes, steps=len(steps), fields=fields, times=time
     assert_eq!(v["ids_ok"], true);
     assert_eq!(v["times"], v["xtimes"]);
     assert_eq!(v["times"].as_array().unwrap().len(), 10);
-    assert_eq!(v["names"], serde_json::json!(["displacement", "material", "partition", "stress", "von_mises"]));
+    assert_eq!(
+        v["names"],
+        serde_json::json!([
+            "displacement",
+            "material",
+            "partition",
+            "stress",
+            "von_mises"
+        ])
+    );
     assert_eq!(v["scene"], "cantilever");
 }
 
@@ -213,15 +383,41 @@ fn bad_input_gets_one_clear_line_and_exit_code_2() {
     std::fs::write(dir.join("bad.msh"), msh_bad).unwrap();
     std::fs::write(dir.join("inverted.msh"), msh_inverted).unwrap();
     let gmsh_deck = |file: &str| {
-        edit(&good, r#"mesh = { kind = "box", origin = [0, 0, 0], size = [10, 1, 1], cells = [40, 4, 4] }"#, &format!(r#"mesh = {{ kind = "gmsh", file = "{file}" }}"#))
-            .replace("group = \"xmin\"", "box = { min = [0, 0, 0], max = [1, 1, 0] }")
-            .replace("group = \"xmax\"", "box = { min = [0, 0, 1], max = [1, 1, 1] }")
+        edit(
+            &good,
+            r#"mesh = { kind = "box", origin = [0, 0, 0], size = [10, 1, 1], cells = [40, 4, 4] }"#,
+            &format!(r#"mesh = {{ kind = "gmsh", file = "{file}" }}"#),
+        )
+        .replace(
+            "group = \"xmin\"",
+            "box = { min = [0, 0, 0], max = [1, 1, 0] }",
+        )
+        .replace(
+            "group = \"xmax\"",
+            "box = { min = [0, 0, 1], max = [1, 1, 1] }",
+        )
     };
     let cases: Vec<(&str, String, &str)> = vec![
-        ("missing-field", edit(&good, "step = 0.1\n", ""), "analysis: missing field `step`"),
-        ("unknown-key", edit(&good, "nu = 0.3\n", "nu = 0.3\npoisson = 0.3\n"), "unknown field `poisson`"),
-        ("unknown-material", edit(&good, "material = \"polymer\"", "material = \"steel\""), "unknown material `steel`"),
-        ("unknown-set", edit(&good, "set = \"clamp\"", "set = \"clamped\""), "unknown node set `clamped`"),
+        (
+            "missing-field",
+            edit(&good, "step = 0.1\n", ""),
+            "analysis: missing field `step`",
+        ),
+        (
+            "unknown-key",
+            edit(&good, "nu = 0.3\n", "nu = 0.3\npoisson = 0.3\n"),
+            "unknown field `poisson`",
+        ),
+        (
+            "unknown-material",
+            edit(&good, "material = \"polymer\"", "material = \"steel\""),
+            "unknown material `steel`",
+        ),
+        (
+            "unknown-set",
+            edit(&good, "set = \"clamp\"", "set = \"clamped\""),
+            "unknown node set `clamped`",
+        ),
         ("bad-mesh", gmsh_deck("bad.msh"), "bad.msh"),
         ("inverted", gmsh_deck("inverted.msh"), "element 1"),
     ];
@@ -229,13 +425,41 @@ fn bad_input_gets_one_clear_line_and_exit_code_2() {
         for (name, deck, want) in &cases {
             let path = dir.join(format!("{name}.toml"));
             std::fs::write(&path, deck).unwrap();
-            let o = alfe(&dir, ranks, &["run", path.to_str().unwrap(), "--out", "o", "--partitions", "parts", "--quiet"]);
+            let o = alfe(
+                &dir,
+                ranks,
+                &[
+                    "run",
+                    path.to_str().unwrap(),
+                    "--out",
+                    "o",
+                    "--partitions",
+                    "parts",
+                    "--quiet",
+                ],
+            );
             let (so, se) = text(&o);
-            assert_eq!(o.status.code(), Some(2), "{name} on {ranks} ranks: exit {:?}\n{so}\n{se}", o.status.code());
+            assert_eq!(
+                o.status.code(),
+                Some(2),
+                "{name} on {ranks} ranks: exit {:?}\n{so}\n{se}",
+                o.status.code()
+            );
             let lines: Vec<&str> = se.lines().filter(|l| l.starts_with("alfe:")).collect();
-            assert_eq!(lines.len(), 1, "{name} on {ranks} ranks: expected one error line, got:\n{se}");
-            assert!(lines[0].contains(want), "{name}: `{}` does not mention `{want}`", lines[0]);
-            assert!(!se.contains("panicked") && !se.contains("internal error"), "{name}: {se}");
+            assert_eq!(
+                lines.len(),
+                1,
+                "{name} on {ranks} ranks: expected one error line, got:\n{se}"
+            );
+            assert!(
+                lines[0].contains(want),
+                "{name}: `{}` does not mention `{want}`",
+                lines[0]
+            );
+            assert!(
+                !se.contains("panicked") && !se.contains("internal error"),
+                "{name}: {se}"
+            );
         }
         // A scene that does not exist.
         let o = alfe(&dir, ranks, &["run", "no-such-scene"]);
@@ -244,7 +468,11 @@ fn bad_input_gets_one_clear_line_and_exit_code_2() {
         assert!(se.contains("unknown scene `no-such-scene`"), "{se}");
     }
     // The inverted element message names the element and the reason.
-    let o = alfe(&dir, 1, &["check", dir.join("inverted.toml").to_str().unwrap()]);
+    let o = alfe(
+        &dir,
+        1,
+        &["check", dir.join("inverted.toml").to_str().unwrap()],
+    );
     let (_, se) = text(&o);
     assert!(se.contains("inverted") || se.contains("negative"), "{se}");
 }
@@ -255,15 +483,70 @@ fn stale_partition_file_is_refused() {
     let dir = temp_dir("stale");
     let deck = builtin("cantilever");
     std::fs::write(dir.join("a.toml"), &deck).unwrap();
-    ok(alfe(&dir, 2, &["run", "a.toml", "--out", "o", "--partitions", "parts", "--quiet"]));
-    std::fs::write(dir.join("a.toml"), edit(&deck, "cells = [40, 4, 4]", "cells = [40, 4, 2]")).unwrap();
-    let o = alfe(&dir, 2, &["run", "a.toml", "--out", "o", "--partitions", "parts", "--quiet"]);
+    ok(alfe(
+        &dir,
+        2,
+        &[
+            "run",
+            "a.toml",
+            "--out",
+            "o",
+            "--partitions",
+            "parts",
+            "--quiet",
+        ],
+    ));
+    std::fs::write(
+        dir.join("a.toml"),
+        edit(&deck, "cells = [40, 4, 4]", "cells = [40, 4, 2]"),
+    )
+    .unwrap();
+    let o = alfe(
+        &dir,
+        2,
+        &[
+            "run",
+            "a.toml",
+            "--out",
+            "o",
+            "--partitions",
+            "parts",
+            "--quiet",
+        ],
+    );
     let (_, se) = text(&o);
     assert_eq!(o.status.code(), Some(2), "{se}");
-    assert!(se.contains("is stale") && se.contains("--repartition"), "{se}");
-    ok(alfe(&dir, 2, &["run", "a.toml", "--out", "o", "--partitions", "parts", "--quiet", "--repartition"]));
+    assert!(
+        se.contains("is stale") && se.contains("--repartition"),
+        "{se}"
+    );
+    ok(alfe(
+        &dir,
+        2,
+        &[
+            "run",
+            "a.toml",
+            "--out",
+            "o",
+            "--partitions",
+            "parts",
+            "--quiet",
+            "--repartition",
+        ],
+    ));
     // `alfe partition` writes the file the run then uses.
-    let p = ok(alfe(&dir, 1, &["partition", "cantilever", "--ranks", "2", "--partitions", "p2"]));
+    let p = ok(alfe(
+        &dir,
+        1,
+        &[
+            "partition",
+            "cantilever",
+            "--ranks",
+            "2",
+            "--partitions",
+            "p2",
+        ],
+    ));
     assert!(p.contains("edge cut"), "{p}");
     assert!(dir.join("p2/cantilever.2.part").exists());
 }
@@ -274,20 +557,50 @@ fn stale_partition_file_is_refused() {
 fn non_convergence_ends_cleanly_with_converged_steps_written() {
     let dir = temp_dir("noconv");
     // The cantilever's steps need 5–6 Newton iterations: a budget of 5 fails at step 2.
-    let deck = edit(&builtin("cantilever"), "max_iterations = 25", "max_iterations = 5");
+    let deck = edit(
+        &builtin("cantilever"),
+        "max_iterations = 25",
+        "max_iterations = 5",
+    );
     std::fs::write(dir.join("a.toml"), deck).unwrap();
     for ranks in [1, 2] {
         let out = format!("o{ranks}");
-        let o = alfe(&dir, ranks, &["run", "a.toml", "--out", &out, "--partitions", "parts", "--quiet"]);
+        let o = alfe(
+            &dir,
+            ranks,
+            &[
+                "run",
+                "a.toml",
+                "--out",
+                &out,
+                "--partitions",
+                "parts",
+                "--quiet",
+            ],
+        );
         let (_, se) = text(&o);
         assert_eq!(o.status.code(), Some(3), "{se}");
-        assert!(se.contains("did not converge") && se.contains("1 converged step(s) written"), "{se}");
-        let s: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(dir.join(&out).join("summary.json")).unwrap()).unwrap();
+        assert!(
+            se.contains("did not converge") && se.contains("1 converged step(s) written"),
+            "{se}"
+        );
+        let s: serde_json::Value = serde_json::from_str(
+            &std::fs::read_to_string(dir.join(&out).join("summary.json")).unwrap(),
+        )
+        .unwrap();
         assert_eq!(s["converged"], false);
         assert_eq!(s["steps"], 1);
         let u = read_u(&dir.join(&out).join("cantilever.h5"));
-        assert_eq!(u.as_object().unwrap().len(), 1, "the converged step is readable");
-        assert_eq!(history(&dir.join(&out).join("history.csv")).len(), 2, "header + one step");
+        assert_eq!(
+            u.as_object().unwrap().len(),
+            1,
+            "the converged step is readable"
+        );
+        assert_eq!(
+            history(&dir.join(&out).join("history.csv")).len(),
+            2,
+            "header + one step"
+        );
     }
 }
 
@@ -303,7 +616,14 @@ fn scene_listing_and_show() {
     let o = alfe(&dir, 1, &["scene", "show", "nope"]);
     assert_eq!(o.status.code(), Some(2));
     let check = ok(alfe(&dir, 1, &["check", "cantilever", "--ranks", "2"]));
-    for want in ["nodes: 1025", "elements: 640", "unknowns: 3075", "edge cut", "imbalance", "rank 1:"] {
+    for want in [
+        "nodes: 1025",
+        "elements: 640",
+        "unknowns: 3075",
+        "edge cut",
+        "imbalance",
+        "rank 1:",
+    ] {
         assert!(check.contains(want), "`{want}` missing in:\n{check}");
     }
 }

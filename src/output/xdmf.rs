@@ -33,7 +33,8 @@ pub enum Center {
 }
 
 /// Shape of one attribute row: 1, 3 or 6 components.
-/// `Tensor6` is xx, yy, zz, xy, yz, xz (XDMF's order, alfe's Voigt order).
+/// `Tensor6` carries alfe's Voigt order xx, yy, zz, xy, yz, xz, which is VTK's symmetric-tensor
+/// order: ParaView passes the six components through and reads them that way.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum AttrKind {
     Scalar,

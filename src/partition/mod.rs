@@ -34,9 +34,9 @@ pub fn partition_elements(mesh: &Mesh, nparts: usize) -> Result<Vec<u32>> {
             "cannot split {ne} elements over {nparts} ranks: use fewer ranks"
         )));
     }
-    let (mut xadj, mut adjncy) = dual_graph(mesh)?;
+    let (xadj, adjncy) = dual_graph(mesh)?;
     let mut part = vec![0i32; ne];
-    let g = metis::Graph::new(1, nparts as i32, &mut xadj, &mut adjncy)
+    let g = metis::Graph::new(1, nparts as i32, &xadj, &adjncy)
         .map_err(|e| Error::runtime(format!("METIS graph: {e}")))?;
     g.set_option(metis::option::Seed(0))
         .part_kway(&mut part)
@@ -109,9 +109,9 @@ pub fn quality(mesh: &Mesh, part: &[u32], nparts: usize) -> Result<Quality> {
 /// A node is owned by the lowest rank that has an element touching it (DESIGN.md).
 pub fn node_owner(mesh: &Mesh, part: &[u32]) -> Vec<u32> {
     let mut owner = vec![u32::MAX; mesh.n_nodes()];
-    for e in 0..mesh.n_elems() {
+    for (e, &p) in part.iter().enumerate() {
         for &n in mesh.elem_nodes(e) {
-            owner[n] = owner[n].min(part[e]);
+            owner[n] = owner[n].min(p);
         }
     }
     owner

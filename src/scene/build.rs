@@ -516,7 +516,7 @@ fn part_mesh(m: &MeshDeck, f: &str, part: u32, deck_dir: &Path) -> Result<Mesh> 
                     format!("expected three positive lengths, got {size:?}"),
                 ));
             }
-            if cells.iter().any(|&c| c == 0) {
+            if cells.contains(&0) {
                 return Err(err(
                     format!("{f}.mesh.cells"),
                     format!("expected three counts ≥ 1, got {cells:?}"),

@@ -63,13 +63,16 @@ pub fn step_times(end: f64, dt: f64) -> Vec<f64> {
         .collect()
 }
 
+/// Called with every converged step, its solution and the model (output, progress).
+pub type StepObserver<'a> = dyn FnMut(&StepRecord, &[f64], &Model) -> Result<()> + 'a;
+
 /// Run the static analysis; `on_step` sees every converged step with the solution.
 pub fn run_static(
     comm: &dyn Comm,
     model: &mut Model,
     u: &mut Vec<f64>,
     opts: &NewtonOptions,
-    on_step: &mut dyn FnMut(&StepRecord, &[f64], &Model) -> Result<()>,
+    on_step: &mut StepObserver,
 ) -> Result<RunTotals> {
     let a = model.local.settings.analysis.clone();
     let n = model.n_owned_dofs();
