@@ -124,6 +124,7 @@ pub fn newton_options(def: &crate::model::def::Settings) -> NewtonOptions {
             max_iterations: s.linear.max_iterations,
         },
         block_jacobi: s.linear.preconditioner == PreconditionerKind::BlockJacobi,
+        pc_lag: s.linear.lag,
     }
 }
 

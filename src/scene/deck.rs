@@ -329,6 +329,11 @@ pub struct LinearDeck {
     pub max_iterations: usize,
     #[serde(default)]
     pub preconditioner: PreconditionerKind,
+    /// Reuse a block-Jacobi factorization for this many further Jacobians (Newton
+    /// iterations, across steps) before refactoring; 0 = refactor every time. A kept
+    /// factorization under which GMRES fails is refreshed at once.
+    #[serde(default)]
+    pub lag: usize,
 }
 
 fn d_lrtol() -> f64 {
@@ -348,6 +353,7 @@ impl Default for LinearDeck {
             restart: d_restart(),
             max_iterations: d_lmax(),
             preconditioner: PreconditionerKind::BlockJacobi,
+            lag: 0,
         }
     }
 }

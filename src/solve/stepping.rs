@@ -5,7 +5,7 @@
 
 use crate::model::Model;
 use crate::parallel::Comm;
-use crate::solve::linear::block_jacobi::BlockJacobi;
+use crate::solve::linear::lagged::LaggedBlockJacobi;
 use crate::solve::linear::matrix::DistMatrix;
 use crate::solve::nonlinear::newton::{newton, NewtonOptions};
 use crate::solve::nonlinear::{NonlinearProblem, SolveStats};
@@ -79,7 +79,7 @@ pub fn run_static(
     u.resize(n, 0.0);
     let mut r = vec![0.0; n];
     let mut k = model.new_matrix(comm);
-    let mut pc: Option<BlockJacobi> = None;
+    let mut pc = LaggedBlockJacobi::new(opts.pc_lag);
     let mut tot = RunTotals::default();
     for (i, &t) in step_times(a.end_time, a.step).iter().enumerate() {
         let t0 = Instant::now();

@@ -7,6 +7,7 @@
 
 pub mod block_jacobi;
 pub mod gmres;
+pub mod lagged;
 pub mod matrix;
 
 pub use block_jacobi::{BlockJacobi, Factorization};

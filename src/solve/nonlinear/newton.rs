@@ -8,8 +8,8 @@
 
 use super::{NonlinearProblem, SolveStats};
 use crate::parallel::Comm;
-use crate::solve::linear::block_jacobi::BlockJacobi;
 use crate::solve::linear::gmres::{gmres, GmresOptions};
+use crate::solve::linear::lagged::LaggedBlockJacobi;
 use crate::solve::linear::matrix::DistMatrix;
 use crate::solve::linear::{Identity, Preconditioner};
 use crate::{ErrorKind, Result};
@@ -22,6 +22,9 @@ pub struct NewtonOptions {
     pub increment_rtol: f64,
     pub linear: GmresOptions,
     pub block_jacobi: bool,
+    /// Newton iterations a block-Jacobi factorization is kept for before the next one
+    /// (0 = refactor at every iteration; it is also kept across load steps).
+    pub pc_lag: usize,
 }
 
 /// A step that makes the residual this many times larger than at the start has diverged.
@@ -38,7 +41,7 @@ pub fn newton(
     r: &mut [f64],
     prescribed: &[(usize, f64)],
     k: &mut DistMatrix,
-    pc: &mut Option<BlockJacobi>,
+    pc: &mut LaggedBlockJacobi,
     opts: &NewtonOptions,
 ) -> Result<SolveStats> {
     let n = u.len();
@@ -135,28 +138,35 @@ pub fn newton(
         k.constrain(comm, &cdofs);
         st.seconds_assembly += t1.elapsed().as_secs_f64();
         let t2 = Instant::now();
-        if opts.block_jacobi {
-            let ok = match pc {
-                Some(p) => p.refactor(k),
-                None => BlockJacobi::new(k).map(|p| {
-                    *pc = Some(p);
-                }),
-            };
-            // A singular block on one rank must stop every rank (no rank left in GMRES).
-            if !comm.all_ok(ok.is_ok()) {
-                st.reason = match ok {
-                    Err(e) => format!("block-Jacobi factorization failed: {e}"),
-                    Ok(()) => "block-Jacobi factorization failed on another rank".into(),
-                };
-                return Ok(st);
+        let x0 = du.clone();
+        let mut gs;
+        let mut fresh = false;
+        loop {
+            if opts.block_jacobi {
+                match pc.update(comm, k) {
+                    Ok(f) => {
+                        fresh |= f;
+                        st.factorizations += f as usize;
+                    }
+                    Err(e) => {
+                        st.reason = e;
+                        return Ok(st);
+                    }
+                }
             }
-            st.factorizations += 1;
+            let prec: &dyn Preconditioner = match (opts.block_jacobi, pc.get()) {
+                (true, Some(p)) => p,
+                _ => &Identity,
+            };
+            gs = gmres(comm, k, prec, &rhs, &mut du, &opts.linear)?;
+            // A kept (lagged) factorization that no longer helps GMRES is refreshed once.
+            if gs.converged || fresh || !opts.block_jacobi {
+                break;
+            }
+            st.linear_iterations += gs.iterations;
+            pc.invalidate();
+            du.copy_from_slice(&x0);
         }
-        let prec: &dyn Preconditioner = match (opts.block_jacobi, pc.as_ref()) {
-            (true, Some(p)) => p,
-            _ => &Identity,
-        };
-        let gs = gmres(comm, k, prec, &rhs, &mut du, &opts.linear)?;
         st.seconds_linear += t2.elapsed().as_secs_f64();
         st.linear_iterations += gs.iterations;
         st.iterations += 1;
