@@ -338,7 +338,7 @@ fn describe(def: &ModelDef) -> String {
     }
     let kinds: Vec<String> = kinds.iter().map(|(k, n)| format!("{n} {k}")).collect();
     let n_con: usize = def.constraints.len();
-    let mut s = format!(
+    format!(
         "scene {}: valid\n  units: {}\n  parts: {}\n  nodes: {}\n  elements: {} ({})\n  unknowns: {} (3 per node)\n  constraints: {}, loads: {}\n  node sets: {}\n  surfaces: {}\n  steps: {}\n",
         def.settings.scene,
         def.settings.units.describe(),
@@ -352,9 +352,7 @@ fn describe(def: &ModelDef) -> String {
         def.node_sets.iter().map(|(k, v)| format!("{k} ({} nodes)", v.len())).collect::<Vec<_>>().join(", "),
         def.surfaces.iter().map(|(k, v)| format!("{k} ({} faces)", v.len())).collect::<Vec<_>>().join(", "),
         crate::solve::stepping::step_times(def.settings.analysis.end_time, def.settings.analysis.step).len(),
-    );
-    s.push_str("");
-    s
+    )
 }
 
 fn describe_partition(def: &ModelDef, part: &[u32], ranks: usize) -> Result<String> {

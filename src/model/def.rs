@@ -52,14 +52,54 @@ impl Curve {
     }
 }
 
-/// Displacement constraint on a node set: component c is prescribed to
-/// `value[c] · curve(t)` where `comps[c]`.
+/// Displacement constraint on a node set: component c (where `comps[c]`) follows
+/// `motion`, scaled in time by `curve`.
 #[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct Constraint {
     pub set: String,
     pub comps: [bool; 3],
-    pub value: [f64; 3],
+    pub motion: Motion,
     pub curve: Curve,
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub enum Motion {
+    /// u = value · curve(t), the same for every node.
+    Uniform { value: [f64; 3] },
+    /// Rigid rotation by angle · curve(t) (radians, right-hand rule) about the line
+    /// through `center` along `axis` (unit): u = R (X − c) − (X − c).
+    Rotation {
+        axis: [f64; 3],
+        center: [f64; 3],
+        angle: f64,
+    },
+}
+
+impl Constraint {
+    /// Prescribed displacement component `c` of a node at reference position `x`.
+    pub fn value(&self, x: [f64; 3], c: usize, t: f64) -> f64 {
+        let s = self.curve.eval(t);
+        match &self.motion {
+            Motion::Uniform { value } => value[c] * s,
+            Motion::Rotation {
+                axis,
+                center,
+                angle,
+            } => {
+                // Rodrigues: R d = d cos θ + (a × d) sin θ + a (a·d)(1 − cos θ).
+                let th = angle * s;
+                let d = [x[0] - center[0], x[1] - center[1], x[2] - center[2]];
+                let a = axis;
+                let cross = [
+                    a[1] * d[2] - a[2] * d[1],
+                    a[2] * d[0] - a[0] * d[2],
+                    a[0] * d[1] - a[1] * d[0],
+                ];
+                let dot = a[0] * d[0] + a[1] * d[1] + a[2] * d[2];
+                d[c] * th.cos() + cross[c] * th.sin() + a[c] * dot * (1.0 - th.cos()) - d[c]
+            }
+        }
+    }
 }
 
 #[derive(Debug, Clone, Serialize, Deserialize)]
@@ -119,6 +159,26 @@ impl ModelDef {
 #[cfg(test)]
 mod tests {
     use super::*;
+    #[test]
+    fn rotation_quarter_turn_about_z() {
+        let c = Constraint {
+            set: "s".into(),
+            comps: [true; 3],
+            motion: Motion::Rotation {
+                axis: [0.0, 0.0, 1.0],
+                center: [1.0, 0.0, 0.0],
+                angle: std::f64::consts::FRAC_PI_2,
+            },
+            curve: Curve::ramp(1.0),
+        };
+        // (2, 0, 5) is 1 from the axis along x: a quarter turn takes it to (1, 1, 5).
+        let u: Vec<f64> = (0..3).map(|k| c.value([2.0, 0.0, 5.0], k, 1.0)).collect();
+        assert!(
+            (u[0] + 1.0).abs() < 1e-15 && (u[1] - 1.0).abs() < 1e-15 && u[2].abs() < 1e-15,
+            "{u:?}"
+        );
+        assert!(c.value([2.0, 0.0, 5.0], 0, 0.0).abs() < 1e-15);
+    }
     #[test]
     fn curve_interpolates_and_clamps() {
         let c = Curve {

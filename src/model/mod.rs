@@ -152,7 +152,7 @@ impl Model {
             .iter()
             .map(|&(d, c)| {
                 let con = &self.local.constraints[c];
-                (d, con.value[d % 3] * con.curve.eval(t))
+                (d, con.value(self.local.coords[d / 3], d % 3, t))
             })
             .collect()
     }

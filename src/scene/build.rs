@@ -331,10 +331,12 @@ pub fn build(deck: &Deck, deck_dir: &Path) -> Result<ModelDef> {
         let f = format!("boundary[{i}]");
         let nodes = set_nodes(format!("{f}.set"), b.set())?;
         resolved_sets.insert(b.set().to_string(), nodes);
-        let (comps_list, value, crv) = match b {
-            BoundaryDeck::Fixed { components, .. } => {
-                (components.clone(), 0.0, Curve::ramp(a.end_time))
-            }
+        let (comps_list, motion, crv) = match b {
+            BoundaryDeck::Fixed { components, .. } => (
+                components.clone(),
+                Motion::Uniform { value: [0.0; 3] },
+                Curve::ramp(a.end_time),
+            ),
             BoundaryDeck::Displacement {
                 components,
                 value,
@@ -344,7 +346,35 @@ pub fn build(deck: &Deck, deck_dir: &Path) -> Result<ModelDef> {
                 if !value.is_finite() {
                     return Err(err(format!("{f}.value"), "expected a finite number"));
                 }
-                (components.clone(), *value, curve(format!("{f}.curve"), c)?)
+                (
+                    components.clone(),
+                    Motion::Uniform { value: [*value; 3] },
+                    curve(format!("{f}.curve"), c)?,
+                )
+            }
+            BoundaryDeck::Rotation {
+                axis,
+                center,
+                angle,
+                curve: c,
+                ..
+            } => {
+                let n = (axis[0] * axis[0] + axis[1] * axis[1] + axis[2] * axis[2]).sqrt();
+                if !(n > 0.0 && n.is_finite()) {
+                    return Err(err(format!("{f}.axis"), "expected a non-zero direction"));
+                }
+                if !angle.is_finite() || center.iter().any(|x| !x.is_finite()) {
+                    return Err(err(&f, "expected finite `angle` and `center`"));
+                }
+                (
+                    vec![Comp::X, Comp::Y, Comp::Z],
+                    Motion::Rotation {
+                        axis: axis.map(|x| x / n),
+                        center: *center,
+                        angle: *angle,
+                    },
+                    curve(format!("{f}.curve"), c)?,
+                )
             }
         };
         if comps_list.is_empty() {
@@ -354,16 +384,13 @@ pub fn build(deck: &Deck, deck_dir: &Path) -> Result<ModelDef> {
             ));
         }
         let mut comps = [false; 3];
-        let mut val = [0.0; 3];
         for c in comps_list {
-            let k = c as usize;
-            comps[k] = true;
-            val[k] = value;
+            comps[c as usize] = true;
         }
         constraints.push(Constraint {
             set: b.set().to_string(),
             comps,
-            value: val,
+            motion,
             curve: crv,
         });
     }

@@ -205,6 +205,17 @@ pub enum BoundaryDeck {
         #[serde(default)]
         curve: Option<String>,
     },
+    /// Rigid rotation of the set by `angle × curve(t)` (radians, right-hand rule) about
+    /// the line through `center` along `axis`; all three components are prescribed.
+    Rotation {
+        set: String,
+        axis: [f64; 3],
+        #[serde(default)]
+        center: [f64; 3],
+        angle: f64,
+        #[serde(default)]
+        curve: Option<String>,
+    },
 }
 
 fn all_comps() -> Vec<Comp> {
@@ -214,7 +225,9 @@ fn all_comps() -> Vec<Comp> {
 impl BoundaryDeck {
     pub fn set(&self) -> &str {
         match self {
-            BoundaryDeck::Fixed { set, .. } | BoundaryDeck::Displacement { set, .. } => set,
+            BoundaryDeck::Fixed { set, .. }
+            | BoundaryDeck::Displacement { set, .. }
+            | BoundaryDeck::Rotation { set, .. } => set,
         }
     }
 }

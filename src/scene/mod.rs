@@ -25,6 +25,11 @@ pub const BUILTIN: &[(&str, &str, &str)] = &[
         include_str!("scenes/patch-tet4.toml"),
     ),
     (
+        "twisted-block",
+        "neo-Hookean block twisted half a turn: large rotation, the solver comparison scene",
+        include_str!("scenes/twisted-block.toml"),
+    ),
+    (
         "cube-stretch",
         "neo-Hookean cube stretched to twice its length between rollers (closed-form stress)",
         include_str!("scenes/cube-stretch.toml"),
