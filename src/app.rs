@@ -8,7 +8,7 @@ use crate::parallel::Comm;
 use crate::partition::{cache, distribute, quality};
 use crate::scene::deck::PreconditionerKind;
 use crate::solve::linear::gmres::GmresOptions;
-use crate::solve::nonlinear::newton::NewtonOptions;
+use crate::solve::nonlinear::{NonlinearOptions, SolverKind};
 use crate::solve::stepping::{run_static, RunTotals};
 use crate::{Error, ErrorKind, Result};
 use std::path::PathBuf;
@@ -111,9 +111,10 @@ pub fn on_rank0<T>(comm: &dyn Comm, f: impl FnOnce() -> Result<T>) -> Result<Opt
 }
 
 /// Newton options from the deck's solver settings.
-pub fn newton_options(def: &crate::model::def::Settings) -> NewtonOptions {
+pub fn solver_options(def: &crate::model::def::Settings, char_length: f64) -> NonlinearOptions {
     let s = &def.solver;
-    NewtonOptions {
+    NonlinearOptions {
+        kind: SolverKind::Newton,
         max_iterations: s.max_iterations,
         residual_rtol: s.residual_rtol,
         increment_rtol: s.increment_rtol,
@@ -125,6 +126,11 @@ pub fn newton_options(def: &crate::model::def::Settings) -> NewtonOptions {
         },
         block_jacobi: s.linear.preconditioner == PreconditionerKind::BlockJacobi,
         pc_lag: s.linear.lag,
+        bfgs_reform: 11,
+        fd_delta: 1e-4,
+        fd_rule: Default::default(),
+        char_length,
+        line_search: false,
     }
 }
 
@@ -203,7 +209,7 @@ pub fn run(comm: &dyn Comm, opts: &RunOptions) -> Result<RunOutcome> {
         .clone()
         .unwrap_or_else(|| PathBuf::from("out").join(&scene));
     let mut writer = ResultsWriter::create(comm, &out, &model)?;
-    let nopts = newton_options(&model.local.settings);
+    let nopts = solver_options(&model.local.settings, model.char_length(comm));
     let every = model.local.settings.output.every;
     let n_steps = crate::solve::stepping::step_times(
         model.local.settings.analysis.end_time,

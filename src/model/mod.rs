@@ -475,6 +475,22 @@ impl Model {
         Ok(out)
     }
 
+    /// Mean characteristic element length over the whole model (collective).
+    pub fn char_length(&self, comm: &dyn Comm) -> f64 {
+        let mut s = [0.0, self.local.n_elems() as f64];
+        for e in 0..self.local.n_elems() {
+            let x0: Vec<[f64; 3]> = self
+                .local
+                .elem_nodes(e)
+                .iter()
+                .map(|&n| self.local.coords[n])
+                .collect();
+            s[0] += crate::fem::element::char_length(self.local.kinds[e], &x0);
+        }
+        comm.allreduce_sum(&mut s);
+        s[0] / s[1].max(1.0)
+    }
+
     /// Owned constrained dofs, local scalar indices (for `DistMatrix::constrain`).
     pub fn constrained_dofs(&self) -> Vec<usize> {
         self.constrained_owned.iter().map(|&(d, _)| d).collect()

@@ -7,8 +7,7 @@ use crate::model::Model;
 use crate::parallel::Comm;
 use crate::solve::linear::lagged::LaggedBlockJacobi;
 use crate::solve::linear::matrix::DistMatrix;
-use crate::solve::nonlinear::newton::{newton, NewtonOptions};
-use crate::solve::nonlinear::{NonlinearProblem, SolveStats};
+use crate::solve::nonlinear::{solve, NonlinearOptions, NonlinearProblem, SolveStats};
 use crate::Result;
 use std::time::Instant;
 
@@ -71,7 +70,7 @@ pub fn run_static(
     comm: &dyn Comm,
     model: &mut Model,
     u: &mut Vec<f64>,
-    opts: &NewtonOptions,
+    opts: &NonlinearOptions,
     on_step: &mut StepObserver,
 ) -> Result<RunTotals> {
     let a = model.local.settings.analysis.clone();
@@ -87,7 +86,7 @@ pub fn run_static(
         let mut trial = u.clone();
         let stats = {
             let mut prob = StaticProblem { model, time: t };
-            newton(
+            solve(
                 comm, &mut prob, &mut trial, &mut r, &g, &mut k, &mut pc, opts,
             )?
         };

@@ -2,11 +2,102 @@
 //! Jacobians on owned dofs; the solver owns the constraint algebra (prescribed dofs),
 //! the linear solves and the convergence tests.
 
+pub mod bfgs;
+pub mod common;
+pub mod jfnk;
 pub mod newton;
 
 use crate::parallel::Comm;
+use crate::solve::linear::gmres::GmresOptions;
+use crate::solve::linear::lagged::LaggedBlockJacobi;
 use crate::solve::linear::matrix::DistMatrix;
 use crate::Result;
+
+/// The three nonlinear solvers (DESIGN.md, "Nonlinear solvers").
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum SolverKind {
+    /// Assembled generalized Jacobian at every iteration.
+    #[default]
+    Newton,
+    /// Matthies–Strang BFGS on a stiffness reformed every `bfgs_reform` iterations.
+    Bfgs,
+    /// Jacobian-free Newton–Krylov with a lagged block-Jacobi preconditioner.
+    Jfnk,
+}
+
+impl SolverKind {
+    pub fn name(self) -> &'static str {
+        match self {
+            SolverKind::Newton => "newton",
+            SolverKind::Bfgs => "bfgs",
+            SolverKind::Jfnk => "jfnk",
+        }
+    }
+    pub fn parse(s: &str) -> Option<Self> {
+        match s {
+            "newton" => Some(Self::Newton),
+            "bfgs" => Some(Self::Bfgs),
+            "jfnk" => Some(Self::Jfnk),
+            _ => None,
+        }
+    }
+}
+
+/// How JFNK picks the finite-difference step ε for J v ≈ (F(u + ε v) − F(u)) / ε.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize, Default)]
+#[serde(rename_all = "kebab-case")]
+pub enum FdRule {
+    /// ε = δ · h / ‖v‖ with h a characteristic element length: the perturbation moves
+    /// nodes by δ of an element (DESIGN.md).
+    #[default]
+    Element,
+    /// ε = √((1 + ‖u‖) ε_mach) / ‖v‖ (Pernice & Walker 1998, NITSOL).
+    WalkerPernice,
+}
+
+/// Settings of a nonlinear solve (defaults documented in the deck, `[solver]`).
+#[derive(Debug, Clone)]
+pub struct NonlinearOptions {
+    pub kind: SolverKind,
+    pub max_iterations: usize,
+    pub residual_rtol: f64,
+    pub increment_rtol: f64,
+    /// GMRES settings: the tolerance for Newton and BFGS solves; JFNK's tolerance is the
+    /// Eisenstat–Walker forcing term (never below this).
+    pub linear: GmresOptions,
+    pub block_jacobi: bool,
+    /// Newton: iterations a factorization is kept for (0 = every iteration).
+    pub pc_lag: usize,
+    /// BFGS: reform (reassemble and refactor) the stiffness every n iterations.
+    pub bfgs_reform: usize,
+    /// JFNK: relative perturbation δ and the rule for ε.
+    pub fd_delta: f64,
+    pub fd_rule: FdRule,
+    /// A characteristic element length h (mean over the model) for the FD step.
+    pub char_length: f64,
+    /// Backtracking line search on ‖r_free‖ (all solvers).
+    pub line_search: bool,
+}
+
+/// Solve one load step with the chosen solver (see each solver's module).
+#[allow(clippy::too_many_arguments)]
+pub fn solve(
+    comm: &dyn Comm,
+    problem: &mut dyn NonlinearProblem,
+    u: &mut [f64],
+    r: &mut [f64],
+    prescribed: &[(usize, f64)],
+    k: &mut DistMatrix,
+    pc: &mut LaggedBlockJacobi,
+    opts: &NonlinearOptions,
+) -> Result<SolveStats> {
+    match opts.kind {
+        SolverKind::Newton => newton::newton(comm, problem, u, r, prescribed, k, pc, opts),
+        SolverKind::Bfgs => bfgs::bfgs(comm, problem, u, r, prescribed, k, pc, opts),
+        SolverKind::Jfnk => jfnk::jfnk(comm, problem, u, r, prescribed, k, pc, opts),
+    }
+}
 
 pub trait NonlinearProblem {
     /// r(u) on owned dofs (rows of constrained dofs hold reactions) and the force
@@ -31,4 +122,6 @@ pub struct SolveStats {
     pub reason: String,
     pub seconds_assembly: f64,
     pub seconds_linear: f64,
+    /// Linear-operator applications that were finite-difference residuals (JFNK).
+    pub fd_products: usize,
 }
