@@ -4,18 +4,27 @@
 //! Two factorizations:
 //! * **LU** (COLAMD column ordering, partial pivoting): any nonsingular block, including
 //!   non-symmetric ones (friction) and saddle points (contact multiplier rows).
-//! * **Cholesky** LLᵀ (AMD ordering): symmetric positive definite blocks (a stiffness
-//!   with Dirichlet rows). On a 3D hex8 elasticity block of ~100k unknowns it is about
-//!   3.5× faster than the LU (COLAMD orders for the pattern of AᵀA, which fills badly
-//!   on 3D meshes).
+//! * **Cholesky** LLᵀ: symmetric positive definite blocks (a stiffness with Dirichlet
+//!   rows). Ordered by default with METIS nested dissection of the node graph
+//!   ([`FillOrdering::NestedDissection`], see [`super::ordering`]); on a 3D hex8
+//!   elasticity block of ~100k unknowns that halves the factor and makes the numeric
+//!   factorization ~3× faster than faer's AMD ([`FillOrdering::Amd`]), and ~10× faster
+//!   than the LU.
+//!
+//! faer's LU has no ordering hook: it always orders columns with COLAMD (minimum degree on
+//! AᵀA, which fills badly on 3D meshes) and its supernodal structure is that of AᵀA, so a
+//! nested dissection column order of A does not help it (measured slower than COLAMD).
+//! With [`FillOrdering::NestedDissection`] the block is permuted symmetrically by the
+//! nested dissection order before COLAMD, which changes COLAMD's tie-breaking only
+//! (measured 10–30% faster on the elasticity block, within noise of a loaded machine).
 //!
 //! [`Factorization::Auto`] (the default) uses Cholesky while the block is numerically
 //! symmetric and the factorization succeeds, and otherwise switches to LU for good
 //! (it never retries Cholesky after a failure, so an indefinite block costs one failed
 //! attempt, not one per refactorization).
 //!
-//! The symbolic factorization (ordering, elimination structure) is computed once per
-//! kind; [`BlockJacobi::refactor`] copies the new values of the same pattern through a
+//! The ordering and the symbolic factorization (elimination structure) are computed once
+//! per kind; [`BlockJacobi::refactor`] copies the new values of the same pattern through a
 //! precomputed gather map into the CSC value array and refactors numerically only. The
 //! preconditioner is local: applying it needs no communication.
 //!
@@ -24,13 +33,20 @@
 //! means the block is singular to working precision and is reported as an `Err`.
 //! Factorization is local: callers agree on failure across ranks with `Comm::all_ok`.
 
+use super::ordering::{self, Graph};
 use super::{DistMatrix, Preconditioner};
 use crate::Error;
+use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::solvers::Solve;
-use faer::sparse::linalg::solvers::{Llt, Lu as SparseLu, SymbolicLlt, SymbolicLu};
-use faer::sparse::linalg::{LltError, LuError};
+use faer::perm::PermRef;
+use faer::sparse::linalg::cholesky::{
+    factorize_symbolic_cholesky, CholeskySymbolicParams, LltRef, SymbolicCholesky,
+    SymmetricOrdering,
+};
+use faer::sparse::linalg::solvers::{Lu as SparseLu, SymbolicLu};
+use faer::sparse::linalg::LuError;
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMat};
-use faer::Side;
+use faer::{Conj, Side};
 use std::time::Instant;
 
 /// Which sparse factorization block Jacobi uses.
@@ -45,15 +61,28 @@ pub enum Factorization {
     Cholesky,
 }
 
+/// Fill-reducing ordering used by the symbolic factorizations.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum FillOrdering {
+    /// METIS nested dissection of the node graph (one vertex per 3×3 block), expanded to
+    /// the dofs: the Cholesky ordering; LU permutes the block by it before COLAMD.
+    #[default]
+    NestedDissection,
+    /// faer's defaults: AMD (Cholesky), COLAMD (LU).
+    Amd,
+}
+
 enum Factor {
     None,
     Lu(Box<SparseLu<usize, f64>>),
-    Llt(Llt<usize, f64>),
+    /// Values in `BlockJacobi::llt_values`, structure in `symbolic_llt`.
+    Llt,
 }
 
 pub struct BlockJacobi {
     n: usize,
     choice: Factorization,
+    ordering: FillOrdering,
     /// In `Auto` mode, set once Cholesky failed or the block was non-symmetric.
     cholesky_ruled_out: bool,
     /// Pattern of the diagonal block (scalar CSC, sorted row indices).
@@ -64,12 +93,22 @@ pub struct BlockJacobi {
     transpose_pos: Vec<usize>,
     csc_vals: Vec<f64>,
     nnz_blocks: usize,
+    /// Node graph of the diagonal block (for the nested dissection ordering).
+    node_graph: Graph,
+    /// Scalar fill-reducing permutation (`perm[new] = old`), computed once.
+    dof_perm: Option<(Vec<usize>, Vec<usize>)>,
     symbolic_lu: Option<SymbolicLu<usize>>,
-    symbolic_llt: Option<SymbolicLlt<usize>>,
+    /// For LU with nested dissection: the pattern of P A Pᵀ and, per position, the
+    /// position in `pattern` it comes from.
+    lu_permuted: Option<(SymbolicSparseColMat<usize>, Vec<usize>)>,
+    lu_vals: Vec<f64>,
+    symbolic_llt: Option<SymbolicCholesky<usize>>,
+    llt_values: Vec<f64>,
     factor: Factor,
     factorizations: usize,
     symbolic_factorizations: usize,
     symbolic_seconds: f64,
+    ordering_seconds: f64,
     last_factor_seconds: f64,
 }
 
@@ -79,6 +118,7 @@ impl std::fmt::Debug for BlockJacobi {
             .field("n", &self.n)
             .field("nnz", &self.src.len())
             .field("kind", &self.kind())
+            .field("ordering", &self.ordering)
             .field("factorizations", &self.factorizations)
             .finish()
     }
@@ -92,6 +132,16 @@ impl BlockJacobi {
 
     /// Factor `mat`'s local diagonal block with the given kind of factorization.
     pub fn with_factorization(mat: &DistMatrix, choice: Factorization) -> crate::Result<Self> {
+        Self::with_options(mat, choice, FillOrdering::default())
+    }
+
+    /// Factor `mat`'s local diagonal block with the given kind of factorization and
+    /// fill-reducing ordering.
+    pub fn with_options(
+        mat: &DistMatrix,
+        choice: Factorization,
+        ordering: FillOrdering,
+    ) -> crate::Result<Self> {
         let n_own = mat.layout().owned_len();
         let n = 3 * n_own;
         // Column counts: every diagonal-part block entry in block column k puts 3 entries
@@ -139,21 +189,37 @@ impl BlockJacobi {
             })
             .collect();
         let pattern = SymbolicSparseColMat::new_checked(n, n, col_ptr, None, row_idx);
+        let node_cols: Vec<usize> = (0..n_own)
+            .flat_map(|i| mat.lcol[mat.diag_begin[i]..mat.diag_end[i]].iter())
+            .map(|&k| k as usize)
+            .collect();
+        let mut node_ptr = vec![0usize; n_own + 1];
+        for i in 0..n_own {
+            node_ptr[i + 1] = node_ptr[i] + mat.diag_end[i] - mat.diag_begin[i];
+        }
+        let node_graph = Graph::symmetrized(n_own, &node_ptr, &node_cols);
         let mut bj = Self {
             n,
             choice,
+            ordering,
             cholesky_ruled_out: false,
             pattern,
             src,
             transpose_pos,
             csc_vals: vec![0.0; nnz],
             nnz_blocks: mat.nnz_blocks_local(),
+            node_graph,
+            dof_perm: None,
             symbolic_lu: None,
+            lu_permuted: None,
+            lu_vals: Vec::new(),
             symbolic_llt: None,
+            llt_values: Vec::new(),
             factor: Factor::None,
             factorizations: 0,
             symbolic_factorizations: 0,
             symbolic_seconds: 0.0,
+            ordering_seconds: 0.0,
             last_factor_seconds: 0.0,
         };
         bj.refactor(mat)?;
@@ -198,6 +264,9 @@ impl BlockJacobi {
                 Err(e) if self.choice == Factorization::Cholesky => return Err(e),
                 Err(_) => {
                     self.cholesky_ruled_out = true;
+                    // Never retried: release the Cholesky factor's memory.
+                    self.symbolic_llt = None;
+                    self.llt_values = Vec::new();
                     self.factor_lu()?;
                 }
             }
@@ -220,42 +289,113 @@ impl BlockJacobi {
         })
     }
 
+    /// The scalar nested dissection permutation (`perm[new] = old`, inverse), computed on
+    /// first use from the node graph.
+    fn nd_perm(&mut self) -> crate::Result<()> {
+        if self.dof_perm.is_none() {
+            let t = Instant::now();
+            let node_perm = ordering::nested_dissection(&self.node_graph)?;
+            let fwd = ordering::expand_to_dofs(&node_perm, 3);
+            let inv = ordering::inverse(&fwd);
+            self.dof_perm = Some((fwd, inv));
+            let dt = t.elapsed().as_secs_f64();
+            self.ordering_seconds += dt;
+            self.symbolic_seconds += dt;
+        }
+        Ok(())
+    }
+
     fn factor_cholesky(&mut self) -> crate::Result<()> {
         if self.symbolic_llt.is_none() {
+            if self.ordering == FillOrdering::NestedDissection {
+                self.nd_perm()?;
+            }
             let t = Instant::now();
-            let sym = SymbolicLlt::try_new(self.pattern.as_ref(), Side::Lower).map_err(|e| {
+            let ord = match (&self.ordering, &self.dof_perm) {
+                (FillOrdering::NestedDissection, Some((fwd, inv))) => {
+                    SymmetricOrdering::Custom(PermRef::new_checked(fwd, inv, self.n))
+                }
+                _ => SymmetricOrdering::Amd,
+            };
+            let sym = factorize_symbolic_cholesky(
+                self.pattern.as_ref(),
+                Side::Lower,
+                ord,
+                CholeskySymbolicParams::default(),
+            )
+            .map_err(|e| {
                 Error::runtime(format!("block Jacobi: symbolic Cholesky failed: {e:?}"))
             })?;
+            self.llt_values = Vec::new();
+            self.llt_values
+                .try_reserve_exact(sym.len_val())
+                .map_err(|_| {
+                    Error::runtime(format!(
+                        "block Jacobi: out of memory for the Cholesky factor ({} values)",
+                        sym.len_val()
+                    ))
+                })?;
+            self.llt_values.resize(sym.len_val(), 0.0);
             self.symbolic_llt = Some(sym);
             self.symbolic_factorizations += 1;
             self.symbolic_seconds += t.elapsed().as_secs_f64();
         }
-        let a = SparseColMatRef::new(self.pattern.as_ref(), &self.csc_vals);
         let sym = self
             .symbolic_llt
-            .clone()
+            .as_ref()
             .expect("symbolic Cholesky present");
-        let llt = Llt::try_new_with_symbolic(sym, a, Side::Lower).map_err(|e| match e {
-            LltError::Numeric(_) => Error::runtime(format!(
-                "block Jacobi: the local {}×{} diagonal block is not positive definite",
+        let a = SparseColMatRef::new(self.pattern.as_ref(), &self.csc_vals);
+        let par = faer::get_global_parallelism();
+        let mut mem =
+            MemBuffer::try_new(sym.factorize_numeric_llt_scratch::<f64>(par, Default::default()))
+                .map_err(|_| {
+                Error::runtime("block Jacobi: out of memory for the Cholesky workspace")
+            })?;
+        sym.factorize_numeric_llt(
+            &mut self.llt_values,
+            a,
+            Side::Lower,
+            Default::default(),
+            par,
+            MemStack::new(&mut mem),
+            Default::default(),
+        )
+        .map_err(|e| {
+            Error::runtime(format!(
+                "block Jacobi: the local {}×{} diagonal block is not positive definite ({e:?})",
                 self.n, self.n
-            )),
-            LltError::Generic(g) => Error::runtime(format!("block Jacobi: Cholesky failed: {g:?}")),
+            ))
         })?;
-        self.factor = Factor::Llt(llt);
+        self.factor = Factor::Llt;
         Ok(())
     }
 
     fn factor_lu(&mut self) -> crate::Result<()> {
         if self.symbolic_lu.is_none() {
+            if self.ordering == FillOrdering::NestedDissection {
+                self.nd_perm()?;
+                let (fwd, inv) = self.dof_perm.as_ref().expect("ordering present");
+                self.lu_permuted = Some(permuted_pattern(&self.pattern, fwd, inv));
+            }
             let t = Instant::now();
-            let sym = SymbolicLu::try_new(self.pattern.as_ref())
+            let pattern = match &self.lu_permuted {
+                Some((p, _)) => p.as_ref(),
+                None => self.pattern.as_ref(),
+            };
+            let sym = SymbolicLu::try_new(pattern)
                 .map_err(|e| Error::runtime(format!("block Jacobi: symbolic LU failed: {e:?}")))?;
             self.symbolic_lu = Some(sym);
             self.symbolic_factorizations += 1;
             self.symbolic_seconds += t.elapsed().as_secs_f64();
         }
-        let a = SparseColMatRef::new(self.pattern.as_ref(), &self.csc_vals);
+        let a = match &self.lu_permuted {
+            Some((p, map)) => {
+                self.lu_vals.clear();
+                self.lu_vals.extend(map.iter().map(|&q| self.csc_vals[q]));
+                SparseColMatRef::new(p.as_ref(), &self.lu_vals)
+            }
+            None => SparseColMatRef::new(self.pattern.as_ref(), &self.csc_vals),
+        };
         let sym = self.symbolic_lu.clone().expect("symbolic LU present");
         let lu = SparseLu::try_new_with_symbolic(sym, a).map_err(|e| match e {
             LuError::SymbolicSingular { index } => Error::runtime(format!(
@@ -273,8 +413,31 @@ impl BlockJacobi {
         let col = faer::ColMut::from_slice_mut(z);
         match &self.factor {
             Factor::None => {}
-            Factor::Lu(lu) => lu.solve_in_place(col),
-            Factor::Llt(llt) => llt.solve_in_place(col),
+            Factor::Lu(lu) => match (&self.lu_permuted, &self.dof_perm) {
+                (Some(_), Some((fwd, _))) => {
+                    let mut x: Vec<f64> = fwd.iter().map(|&i| col[i]).collect();
+                    lu.solve_in_place(faer::ColMut::from_slice_mut(&mut x));
+                    let mut col = col;
+                    for (&i, &v) in fwd.iter().zip(&x) {
+                        col[i] = v;
+                    }
+                }
+                _ => lu.solve_in_place(col),
+            },
+            Factor::Llt => {
+                let sym = self
+                    .symbolic_llt
+                    .as_ref()
+                    .expect("symbolic Cholesky present");
+                let par = faer::get_global_parallelism();
+                let mut mem = MemBuffer::new(sym.solve_in_place_scratch::<f64>(1, par));
+                LltRef::new(sym, &self.llt_values).solve_in_place_with_conj(
+                    Conj::No,
+                    col.as_mat_mut(),
+                    par,
+                    MemStack::new(&mut mem),
+                );
+            }
         }
     }
 
@@ -313,7 +476,7 @@ impl BlockJacobi {
         match self.factor {
             Factor::None => Factorization::Auto,
             Factor::Lu(_) => Factorization::Lu,
-            Factor::Llt(_) => Factorization::Cholesky,
+            Factor::Llt => Factorization::Cholesky,
         }
     }
     /// Size of the factored block (owned scalar dofs).
@@ -336,11 +499,52 @@ impl BlockJacobi {
     pub fn symbolic_seconds(&self) -> f64 {
         self.symbolic_seconds
     }
+    /// The fill-reducing ordering requested.
+    pub fn ordering(&self) -> FillOrdering {
+        self.ordering
+    }
+    /// Wall time of the nested dissection ordering (included in
+    /// [`Self::symbolic_seconds`]).
+    pub fn ordering_seconds(&self) -> f64 {
+        self.ordering_seconds
+    }
+    /// Nonzeros of the Cholesky factor L (0 before a Cholesky symbolic factorization).
+    pub fn cholesky_factor_nnz(&self) -> usize {
+        self.symbolic_llt.as_ref().map_or(0, |s| s.len_val())
+    }
     /// Wall time of the last numeric factorization (value gather, factorization, check
     /// solve; on the first call also the symbolic factorization).
     pub fn last_factor_seconds(&self) -> f64 {
         self.last_factor_seconds
     }
+}
+
+/// The pattern of P A Pᵀ (`B[k, l] = A[fwd[k], fwd[l]]`, sorted row indices) and, for
+/// each of its positions, the position in `a` it comes from.
+fn permuted_pattern(
+    a: &SymbolicSparseColMat<usize>,
+    fwd: &[usize],
+    inv: &[usize],
+) -> (SymbolicSparseColMat<usize>, Vec<usize>) {
+    let n = fwd.len();
+    let (cp, ri) = (a.col_ptr(), a.row_idx());
+    let mut col_ptr = vec![0usize; n + 1];
+    let mut row_idx = Vec::with_capacity(ri.len());
+    let mut map = Vec::with_capacity(ri.len());
+    let mut col: Vec<(usize, usize)> = Vec::new();
+    for l in 0..n {
+        let j = fwd[l];
+        col.clear();
+        col.extend((cp[j]..cp[j + 1]).map(|p| (inv[ri[p]], p)));
+        col.sort_unstable();
+        row_idx.extend(col.iter().map(|c| c.0));
+        map.extend(col.iter().map(|c| c.1));
+        col_ptr[l + 1] = row_idx.len();
+    }
+    (
+        SymbolicSparseColMat::new_checked(n, n, col_ptr, None, row_idx),
+        map,
+    )
 }
 
 impl Preconditioner for BlockJacobi {
@@ -446,6 +650,67 @@ mod tests {
         assert_eq!(bj.symbolic_factorizations(), 1);
         bj.apply(&r, &mut z);
         assert!(residual(&m, &z, &r) < 1e-12);
+    }
+
+    #[test]
+    fn nested_dissection_matches_amd_for_cholesky_and_lu() {
+        use crate::parallel::run_ranks;
+        // 7³ nodes (1029 unknowns): large enough for METIS to dissect, not just MMD.
+        for p in [1usize, 2] {
+            let counts: Vec<usize> = (0..p).map(|r| 343 * (r + 1) / p - 343 * r / p).collect();
+            run_ranks(p, |c| {
+                let m = elasticity_cube(c, 6, &counts);
+                let n = m.n_owned_dofs();
+                let r: Vec<f64> = (0..n).map(|i| (i as f64 * 0.37).cos()).collect();
+                let solve = |kind, ord| {
+                    let bj = BlockJacobi::with_options(&m, kind, ord).unwrap();
+                    assert_eq!(bj.kind(), kind);
+                    assert_eq!(bj.ordering(), ord);
+                    let mut z = vec![0.0; n];
+                    bj.apply(&r, &mut z);
+                    (bj, z)
+                };
+                let (amd, z_amd) = solve(Factorization::Cholesky, FillOrdering::Amd);
+                let (nd, z_nd) = solve(Factorization::Cholesky, FillOrdering::NestedDissection);
+                let (_, z_lu_amd) = solve(Factorization::Lu, FillOrdering::Amd);
+                let (lu_nd, z_lu_nd) = solve(Factorization::Lu, FillOrdering::NestedDissection);
+                let zmax = z_amd.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+                for z in [&z_nd, &z_lu_amd, &z_lu_nd] {
+                    let d = z_amd
+                        .iter()
+                        .zip(z)
+                        .map(|(a, b)| (a - b).abs())
+                        .fold(0.0, f64::max);
+                    assert!(d < 1e-10 * zmax, "{d} vs {zmax}");
+                }
+                assert_eq!(amd.ordering_seconds(), 0.0);
+                assert!(amd.dof_perm.is_none());
+                for bj in [&nd, &lu_nd] {
+                    let (fwd, inv) = bj.dof_perm.as_ref().unwrap();
+                    assert!(ordering::is_permutation(fwd));
+                    assert_eq!(fwd.len(), n);
+                    assert!((0..n).all(|k| inv[fwd[k]] == k));
+                    // The three dofs of a node stay together, in order.
+                    assert!(fwd
+                        .chunks(3)
+                        .all(|d| d[0] % 3 == 0 && d[1] == d[0] + 1 && d[2] == d[0] + 2));
+                }
+                // Nested dissection is not the identity and fills about as little as AMD
+                // on this small cube (it wins on large 3D blocks).
+                let (fwd, _) = nd.dof_perm.as_ref().unwrap();
+                assert!(fwd.iter().enumerate().any(|(k, &i)| k != i));
+                assert!(
+                    nd.cholesky_factor_nnz() < amd.cholesky_factor_nnz() * 11 / 10,
+                    "nd {} amd {}",
+                    nd.cholesky_factor_nnz(),
+                    amd.cholesky_factor_nnz()
+                );
+                // Default: Auto with nested dissection.
+                let bj = BlockJacobi::new(&m).unwrap();
+                assert_eq!(bj.kind(), Factorization::Cholesky);
+                assert_eq!(bj.ordering(), FillOrdering::NestedDissection);
+            });
+        }
     }
 
     #[test]
@@ -596,16 +861,43 @@ mod tests {
         }
     }
 
-    /// Timing of faer's LU (COLAMD) on a ~100k-unknown elasticity block, and block
-    /// Jacobi GMRES on 2 thread ranks. Run with
+    /// Peak resident set size of this process (VmHWM), in MiB.
+    fn peak_rss_mib() -> f64 {
+        std::fs::read_to_string("/proc/self/status")
+            .ok()
+            .and_then(|s| {
+                s.lines()
+                    .find(|l| l.starts_with("VmHWM:"))
+                    .and_then(|l| l.split_whitespace().nth(1)?.parse::<f64>().ok())
+            })
+            .map_or(f64::NAN, |kib| kib / 1024.0)
+    }
+
+    /// Reset the peak RSS to the current RSS (Linux: write 5 to /proc/self/clear_refs).
+    fn reset_peak_rss() {
+        let _ = std::fs::write("/proc/self/clear_refs", "5");
+    }
+
+    /// Timing of the Cholesky and LU factorizations with AMD/COLAMD and nested
+    /// dissection on a ~100k-unknown elasticity block, and block Jacobi GMRES on 2 and 4
+    /// thread ranks. Run with
     /// `cargo test --release --lib timing_elasticity_100k -- --ignored --nocapture`.
+    /// Environment: `ALFE_TIMING_NE` elements per side (default 31: 32³ nodes = 98304
+    /// unknowns; 43 gives 254k), `ALFE_TIMING_CASES` a comma list of `llt-amd, llt-nd,
+    /// lu-amd, lu-nd, ranks` (default all).
     #[test]
     #[ignore]
     fn timing_elasticity_100k() {
         use crate::parallel::run_ranks;
         use crate::solve::linear::{gmres, GmresOptions};
         faer::set_global_parallelism(faer::Par::Seq);
-        let ne = 31; // 32³ nodes = 98304 unknowns
+        let ne: usize = std::env::var("ALFE_TIMING_NE")
+            .ok()
+            .and_then(|v| v.parse().ok())
+            .unwrap_or(31);
+        let cases = std::env::var("ALFE_TIMING_CASES")
+            .unwrap_or_else(|_| "llt-amd,llt-nd,lu-amd,lu-nd,ranks".into());
+        let want = |c: &str| cases.split(',').any(|x| x.trim() == c);
         let n_blocks = (ne + 1) * (ne + 1) * (ne + 1);
         let t = Instant::now();
         let mut m = elasticity_cube(&SerialComm, ne, &[n_blocks]);
@@ -618,24 +910,74 @@ mod tests {
                 m.spmv(&SerialComm, &x, &mut y);
             }
             eprintln!(
-                "1 rank spmv: {:.2} ms ({} scalar nonzeros)",
+                "1 rank: n = {}, {} scalar nonzeros; assembly {t_asm:.2} s; spmv {:.2} ms; \
+                 peak RSS {:.0} MiB",
+                m.n_owned_dofs(),
+                m.nnz_local(),
                 t.elapsed().as_secs_f64() / 20.0 * 1e3,
-                m.nnz_local()
+                peak_rss_mib()
             );
         }
-        let t = Instant::now();
-        let mut bj = BlockJacobi::with_factorization(&m, Factorization::Lu).unwrap();
-        let t_first = t.elapsed().as_secs_f64();
-        let t = Instant::now();
-        bj.refactor(&m).unwrap();
-        let t_refactor = t.elapsed().as_secs_f64();
         let b: Vec<f64> = (0..m.n_owned_dofs())
             .map(|i| if i % 3 == 2 { -1.0 } else { 0.1 })
             .collect();
-        let mut z = vec![0.0; b.len()];
-        let t = Instant::now();
-        bj.apply(&b, &mut z);
-        let t_solve = t.elapsed().as_secs_f64();
+        let mut z_ref: Option<Vec<f64>> = None;
+        for (name, kind, ord) in [
+            ("llt-amd", Factorization::Cholesky, FillOrdering::Amd),
+            (
+                "llt-nd",
+                Factorization::Cholesky,
+                FillOrdering::NestedDissection,
+            ),
+            ("lu-amd", Factorization::Lu, FillOrdering::Amd),
+            ("lu-nd", Factorization::Lu, FillOrdering::NestedDissection),
+        ] {
+            if !want(name) {
+                continue;
+            }
+            reset_peak_rss();
+            let rss0 = peak_rss_mib();
+            let t = Instant::now();
+            let mut bj = BlockJacobi::with_options(&m, kind, ord).unwrap();
+            let t_first = t.elapsed().as_secs_f64();
+            assert_eq!(bj.kind(), kind);
+            let rss1 = peak_rss_mib();
+            let t = Instant::now();
+            bj.refactor(&m).unwrap();
+            let t_refactor = t.elapsed().as_secs_f64();
+            let mut z = vec![0.0; b.len()];
+            let t = Instant::now();
+            bj.apply(&b, &mut z);
+            let t_solve = t.elapsed().as_secs_f64();
+            let res = residual(&m, &z, &b);
+            let diff = z_ref.as_ref().map_or(0.0, |r| {
+                r.iter()
+                    .zip(&z)
+                    .map(|(a, b)| (a - b).abs())
+                    .fold(0.0, f64::max)
+            });
+            let zmax = z.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            eprintln!(
+                "1 rank {name}: ordering {:.2} s; symbolic (incl. ordering) {:.2} s; new() \
+                 total {t_first:.2} s; refactor {t_refactor:.2} s; one solve {t_solve:.3} s; \
+                 L values {}; peak RSS during new() {:.0} MiB (+{:.0}); residual {res:.1e}; \
+                 max|z - z_first| / max|z| = {:.1e}",
+                bj.ordering_seconds(),
+                bj.symbolic_seconds(),
+                bj.cholesky_factor_nnz(),
+                rss1,
+                rss1 - rss0,
+                diff / zmax
+            );
+            assert!(res < 1e-8, "{name}: residual {res}");
+            if z_ref.is_none() {
+                z_ref = Some(z);
+            }
+        }
+        if !want("ranks") {
+            return;
+        }
+        let bj = BlockJacobi::new(&m).unwrap();
         let mut x = vec![0.0; b.len()];
         let st = gmres(
             &SerialComm,
@@ -646,37 +988,7 @@ mod tests {
             &GmresOptions::default(),
         )
         .unwrap();
-        eprintln!(
-            "1 rank LU: n = {}, nnz = {}; assembly {t_asm:.2} s; symbolic {:.2} s; new() total \
-             {t_first:.2} s; refactor {t_refactor:.2} s; one solve {t_solve:.3} s; GMRES {} it",
-            bj.n(),
-            bj.nnz(),
-            bj.symbolic_seconds(),
-            st.iterations
-        );
         assert!(st.converged && st.iterations == 1);
-
-        let t = Instant::now();
-        let mut bj = BlockJacobi::new(&m).unwrap();
-        let t_first = t.elapsed().as_secs_f64();
-        assert_eq!(bj.kind(), Factorization::Cholesky);
-        let t = Instant::now();
-        bj.refactor(&m).unwrap();
-        let t_refactor = t.elapsed().as_secs_f64();
-        let mut z2 = vec![0.0; b.len()];
-        let t = Instant::now();
-        bj.apply(&b, &mut z2);
-        let t_solve = t.elapsed().as_secs_f64();
-        let diff = z
-            .iter()
-            .zip(&z2)
-            .map(|(a, b)| (a - b).abs())
-            .fold(0.0, f64::max);
-        eprintln!(
-            "1 rank Auto (Cholesky, AMD): symbolic {:.2} s; new() total {t_first:.2} s; refactor \
-             {t_refactor:.2} s; one solve {t_solve:.3} s; max |z_lu - z_llt| = {diff:.1e}",
-            bj.symbolic_seconds()
-        );
 
         for p in [2usize, 4] {
             let counts: Vec<usize> = (0..p)

@@ -9,8 +9,9 @@ pub mod block_jacobi;
 pub mod gmres;
 pub mod lagged;
 pub mod matrix;
+pub mod ordering;
 
-pub use block_jacobi::{BlockJacobi, Factorization};
+pub use block_jacobi::{BlockJacobi, Factorization, FillOrdering};
 pub use gmres::{gmres, GmresOptions, GmresStats};
 
 pub use matrix::DistMatrix;
