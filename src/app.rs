@@ -6,9 +6,9 @@ use crate::model::Model;
 use crate::output::results::ResultsWriter;
 use crate::parallel::Comm;
 use crate::partition::{cache, distribute, quality};
-use crate::scene::deck::PreconditionerKind;
+use crate::scene::deck::{FdStepDeck, NonlinearKind, PreconditionerKind};
 use crate::solve::linear::gmres::GmresOptions;
-use crate::solve::nonlinear::{NonlinearOptions, SolverKind};
+use crate::solve::nonlinear::{FdRule, NonlinearOptions, SolverKind};
 use crate::solve::stepping::{run_static, RunTotals};
 use crate::{Error, ErrorKind, Result};
 use std::path::PathBuf;
@@ -26,6 +26,8 @@ pub struct RunOptions {
     pub repartition: bool,
     /// No progress lines.
     pub quiet: bool,
+    /// Override the deck's nonlinear solver (`--solver`).
+    pub solver: Option<SolverKind>,
 }
 
 /// What a run leaves behind besides its files (also written to `summary.json`).
@@ -37,6 +39,8 @@ pub struct Summary {
     pub nodes: usize,
     pub elements: usize,
     pub unknowns: usize,
+    /// The nonlinear solver used.
+    pub solver: String,
     pub steps: usize,
     pub converged: bool,
     pub nonlinear_iterations: usize,
@@ -111,10 +115,18 @@ pub fn on_rank0<T>(comm: &dyn Comm, f: impl FnOnce() -> Result<T>) -> Result<Opt
 }
 
 /// Newton options from the deck's solver settings.
-pub fn solver_options(def: &crate::model::def::Settings, char_length: f64) -> NonlinearOptions {
+pub fn solver_options(
+    def: &crate::model::def::Settings,
+    char_length: f64,
+    kind: Option<SolverKind>,
+) -> NonlinearOptions {
     let s = &def.solver;
+    let kind = kind.unwrap_or(match s.nonlinear {
+        NonlinearKind::Newton => SolverKind::Newton,
+        NonlinearKind::Jfnk => SolverKind::Jfnk,
+    });
     NonlinearOptions {
-        kind: SolverKind::Newton,
+        kind,
         max_iterations: s.max_iterations,
         residual_rtol: s.residual_rtol,
         increment_rtol: s.increment_rtol,
@@ -127,10 +139,13 @@ pub fn solver_options(def: &crate::model::def::Settings, char_length: f64) -> No
         block_jacobi: s.linear.preconditioner == PreconditionerKind::BlockJacobi,
         pc_lag: s.linear.lag,
         bfgs_reform: 11,
-        fd_delta: 1e-4,
-        fd_rule: Default::default(),
+        fd_delta: s.fd_delta,
+        fd_rule: match s.fd_step {
+            FdStepDeck::Element => FdRule::Element,
+            FdStepDeck::WalkerPernice => FdRule::WalkerPernice,
+        },
         char_length,
-        line_search: false,
+        line_search: s.line_search.unwrap_or(false),
     }
 }
 
@@ -209,18 +224,17 @@ pub fn run(comm: &dyn Comm, opts: &RunOptions) -> Result<RunOutcome> {
         .clone()
         .unwrap_or_else(|| PathBuf::from("out").join(&scene));
     let mut writer = ResultsWriter::create(comm, &out, &model)?;
-    let nopts = solver_options(&model.local.settings, model.char_length(comm));
+    let nopts = solver_options(&model.local.settings, model.char_length(comm), opts.solver);
     let every = model.local.settings.output.every;
-    let n_steps = crate::solve::stepping::step_times(
-        model.local.settings.analysis.end_time,
-        model.local.settings.analysis.step,
-    )
-    .len();
+    let end_time = model.local.settings.analysis.end_time;
+    let n_steps =
+        crate::solve::stepping::step_times(end_time, model.local.settings.analysis.step).len();
     let quiet = opts.quiet || comm.rank() != 0;
     if !quiet {
         println!(
-            "alfe: scene {scene} on {} rank(s): {} nodes, {} elements, {} unknowns, {} steps",
+            "alfe: scene {scene} on {} rank(s) with {}: {} nodes, {} elements, {} unknowns, {} nominal steps",
             comm.size(),
+            nopts.kind.name(),
             model.local.n_nodes_global,
             model.local.n_elems_global,
             3 * model.local.n_nodes_global,
@@ -231,7 +245,7 @@ pub fn run(comm: &dyn Comm, opts: &RunOptions) -> Result<RunOutcome> {
     let mut records = Vec::new();
     let set_names = model.local.reaction_sets.clone();
     let totals: RunTotals = run_static(comm, &mut model, &mut u, &nopts, &mut |rec, u, m| {
-        let fields = rec.step % every == 0 || rec.step == n_steps;
+        let fields = rec.step % every == 0 || rec.time >= end_time;
         writer.step(comm, rec, u, m, fields)?;
         records.push(rec.clone());
         if !quiet {
@@ -240,10 +254,17 @@ pub fn run(comm: &dyn Comm, opts: &RunOptions) -> Result<RunOutcome> {
                 .zip(&rec.reactions)
                 .map(|(n, f)| format!(" {n}=({:.4e}, {:.4e}, {:.4e})", f[0], f[1], f[2]))
                 .collect::<String>();
+            let retry = if rec.retries > 0 {
+                format!("  retries {}", rec.retries)
+            } else {
+                String::new()
+            };
             println!(
-                "step {:>4}/{n_steps}  t={:<10.4e} newton {:>2}  gmres {:>4}  |r|/f={:.2e}  {:.2}s{reac}",
+                "step {:>4}  t={:<10.4e} ({:>3.0}%)  {} {:>2}  gmres {:>4}  |r|/f={:.2e}  {:.2}s{retry}{reac}",
                 rec.step,
                 rec.time,
+                100.0 * rec.time / end_time,
+                nopts.kind.name(),
                 rec.stats.iterations,
                 rec.stats.linear_iterations,
                 rec.stats.residual_history.last().copied().unwrap_or(0.0),
@@ -272,6 +293,7 @@ pub fn run(comm: &dyn Comm, opts: &RunOptions) -> Result<RunOutcome> {
         nodes: model.local.n_nodes_global,
         elements: model.local.n_elems_global,
         unknowns: 3 * model.local.n_nodes_global,
+        solver: nopts.kind.name().into(),
         steps: totals.steps,
         converged: totals.converged,
         nonlinear_iterations: totals.nonlinear_iterations,

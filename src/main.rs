@@ -16,6 +16,7 @@ usage:
       --partitions DIR   partition cache directory (default partitions)
       --repartition      recompute a cached partition instead of using it
       --quiet            no progress lines
+      --solver S         newton | jfnk (overrides the deck's [solver] nonlinear)
   alfe scenes                            list the built-in scenes
   alfe scene show NAME                   print a built-in scene's deck
   alfe check SCENE|DECK [--ranks N]      validate; print model size and partition quality
@@ -118,13 +119,28 @@ fn main_inner(comm: &dyn Comm, raw: &[String]) -> Result<()> {
     };
     match cmd {
         "run" => {
-            let a = parse_args(rest, &["out", "partitions"], &["repartition", "quiet"])?;
+            let a = parse_args(
+                rest,
+                &["out", "partitions", "solver"],
+                &["repartition", "quiet"],
+            )?;
+            let solver = a
+                .get("solver")
+                .map(|s| {
+                    alfe::solve::nonlinear::SolverKind::parse(s)
+                        .filter(|k| *k != alfe::solve::nonlinear::SolverKind::Bfgs)
+                        .ok_or_else(|| {
+                            Error::input(format!("--solver: expected newton or jfnk, got `{s}`"))
+                        })
+                })
+                .transpose()?;
             let opts = RunOptions {
                 target: one_target(&a.words, "run")?,
                 out: a.get("out").map(PathBuf::from),
                 partitions: PathBuf::from(a.get("partitions").unwrap_or("partitions")),
                 repartition: a.has("repartition"),
                 quiet: a.has("quiet"),
+                solver,
             };
             let s = app::run(comm, &opts)?.summary;
             say(&format!(

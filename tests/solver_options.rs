@@ -73,3 +73,32 @@ fn unpreconditioned_gmres_reaches_the_same_answer() {
     assert_eq!(plain.summary.factorizations, 0);
     assert!(plain.summary.linear_iterations > bj.summary.linear_iterations);
 }
+
+/// The whole cantilever load in one step with a budget of 8 iterations cannot converge;
+/// step control halves it (counted retries), grows it back after easy steps, and the run
+/// ends at the same answer as ten even steps.
+#[test]
+fn a_too_large_first_step_is_rescued_by_retries() {
+    let base = builtin("cantilever");
+    let reference = run_deck("even", &base);
+    let one = edit(&base, "step = 0.1\n", "step = 1.0\n");
+    let one = edit(&one, "max_iterations = 25", "max_iterations = 8");
+    let out = run_deck("onestep", &one);
+    assert!(out.summary.converged);
+    assert!(
+        out.summary.retries >= 1,
+        "the first attempt must fail: {:?}",
+        out.summary.retries
+    );
+    let last = out.steps.last().unwrap();
+    assert_eq!(last.time, 1.0);
+    assert!(out.steps.iter().any(|s| s.retries > 0));
+    let (d, s) = max_diff(&reference, &out);
+    assert!(d <= 1e-6 * s, "{d:e} of {s:e}");
+    eprintln!(
+        "steps {} retries {} times {:?}",
+        out.steps.len(),
+        out.summary.retries,
+        out.steps.iter().map(|s| s.time).collect::<Vec<_>>()
+    );
+}

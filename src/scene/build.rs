@@ -297,6 +297,22 @@ pub fn build(deck: &Deck, deck_dir: &Path) -> Result<ModelDef> {
             ),
         ));
     }
+    if let Some(m) = a.min_step {
+        if !(m > 0.0 && m <= a.step) {
+            return Err(err(
+                "analysis.min_step",
+                format!("expected 0 < min_step ≤ step ({}), got {m}", a.step),
+            ));
+        }
+    }
+    if let Some(m) = a.max_step {
+        if !(m >= a.step && m <= a.end_time) {
+            return Err(err(
+                "analysis.max_step",
+                format!("expected step ≤ max_step ≤ end_time, got {m}"),
+            ));
+        }
+    }
     let curve = |field: String, name: &Option<String>| -> Result<Curve> {
         match name {
             None => Ok(Curve::ramp(a.end_time)),
@@ -478,6 +494,12 @@ pub fn build(deck: &Deck, deck_dir: &Path) -> Result<ModelDef> {
                 format!("expected a tolerance in (0, 1), got {v}"),
             ));
         }
+    }
+    if !(s.fd_delta > 0.0 && s.fd_delta < 1.0) {
+        return Err(err(
+            "solver.fd_delta",
+            format!("expected 0 < fd_delta < 1, got {}", s.fd_delta),
+        ));
     }
     if s.linear.restart == 0 || s.linear.max_iterations == 0 {
         return Err(err(

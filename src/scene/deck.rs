@@ -271,15 +271,35 @@ pub struct AnalysisDeck {
     pub kind: AnalysisKind,
     /// Pseudo-time at the end of the load path.
     pub end_time: f64,
-    /// Pseudo-time step.
+    /// Pseudo-time step (the first step, and the largest unless `max_step` says).
     pub step: f64,
+    /// Smallest step a failing step may be cut to before the run ends (default step/1000).
+    #[serde(default)]
+    pub min_step: Option<f64>,
+    /// Largest step after growth (default `step`).
+    #[serde(default)]
+    pub max_step: Option<f64>,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize, Default)]
 #[serde(rename_all = "lowercase")]
 pub enum NonlinearKind {
+    /// Full Newton: assembled Jacobian and a fresh factorization every iteration.
     #[default]
     Newton,
+    /// Jacobian-free Newton–Krylov with a block-Jacobi preconditioner lagged per step.
+    Jfnk,
+}
+
+/// JFNK's finite-difference step rule.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize, Default)]
+#[serde(rename_all = "kebab-case")]
+pub enum FdStepDeck {
+    /// ε = fd_delta · h / ‖v‖, h the mean element length.
+    #[default]
+    Element,
+    /// ε = √((1 + ‖u‖) ε_mach) / ‖v‖.
+    WalkerPernice,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize, Default)]
@@ -306,6 +326,21 @@ pub struct SolverDeck {
     pub increment_rtol: f64,
     #[serde(default)]
     pub linear: LinearDeck,
+    /// Backtracking (Armijo) line search on ‖r_free‖, off by default: on the large-rotation
+    /// scenes full steps overshoot and then converge, and residual backtracking slows
+    /// or stalls Newton and JFNK (measured on `cantilever` and `twisted-block`).
+    #[serde(default)]
+    pub line_search: Option<bool>,
+    /// JFNK: relative finite-difference perturbation δ (of an element length).
+    #[serde(default = "d_fd_delta")]
+    pub fd_delta: f64,
+    /// JFNK: the rule for the finite-difference step.
+    #[serde(default)]
+    pub fd_step: FdStepDeck,
+}
+
+fn d_fd_delta() -> f64 {
+    1e-4
 }
 
 fn d_max_it() -> usize {
@@ -326,6 +361,9 @@ impl Default for SolverDeck {
             residual_rtol: d_rrtol(),
             increment_rtol: d_urtol(),
             linear: LinearDeck::default(),
+            line_search: None,
+            fd_delta: d_fd_delta(),
+            fd_step: FdStepDeck::Element,
         }
     }
 }

@@ -65,6 +65,31 @@ pub fn step_times(end: f64, dt: f64) -> Vec<f64> {
 /// Called with every converged step, its solution and the model (output, progress).
 pub type StepObserver<'a> = dyn FnMut(&StepRecord, &[f64], &Model) -> Result<()> + 'a;
 
+/// Step-size control: a step that fails is retried from the last converged state with
+/// half the step (a counted retry; the lagged preconditioner is refreshed); after a step
+/// that converged in at most `easy_iterations`, the step grows by `growth` up to
+/// `max_step`. Below `min_step` the run ends (everything converged so far is kept).
+#[derive(Debug, Clone)]
+pub struct StepControl {
+    pub step: f64,
+    pub min_step: f64,
+    pub max_step: f64,
+    pub growth: f64,
+    pub easy_iterations: usize,
+}
+
+impl StepControl {
+    pub fn from_analysis(a: &crate::scene::deck::AnalysisDeck, max_iterations: usize) -> Self {
+        Self {
+            step: a.step,
+            min_step: a.min_step.unwrap_or(a.step * 1e-3),
+            max_step: a.max_step.unwrap_or(a.step),
+            growth: 1.5,
+            easy_iterations: (max_iterations / 4).max(3),
+        }
+    }
+}
+
 /// Run the static analysis; `on_step` sees every converged step with the solution.
 pub fn run_static(
     comm: &dyn Comm,
@@ -74,14 +99,25 @@ pub fn run_static(
     on_step: &mut StepObserver,
 ) -> Result<RunTotals> {
     let a = model.local.settings.analysis.clone();
+    let ctl = StepControl::from_analysis(&a, opts.max_iterations);
     let n = model.n_owned_dofs();
     u.resize(n, 0.0);
     let mut r = vec![0.0; n];
     let mut k = model.new_matrix(comm);
     let mut pc = LaggedBlockJacobi::new(opts.pc_lag);
     let mut tot = RunTotals::default();
-    for (i, &t) in step_times(a.end_time, a.step).iter().enumerate() {
-        let t0 = Instant::now();
+    let end = a.end_time;
+    let mut t_done = 0.0;
+    let mut dt = ctl.step.min(ctl.max_step);
+    let mut step = 0;
+    let mut retries = 0;
+    let mut t0 = Instant::now();
+    while t_done < end * (1.0 - 1e-12) {
+        // Land exactly on the end time; avoid a sliver of a last step.
+        let mut t = t_done + dt;
+        if t > end * (1.0 - 1e-9) || end - t < 1e-3 * dt {
+            t = end;
+        }
         let g = model.prescribed(t);
         let mut trial = u.clone();
         let stats = {
@@ -97,25 +133,42 @@ pub fn run_static(
         tot.seconds_assembly += stats.seconds_assembly;
         tot.seconds_linear += stats.seconds_linear;
         if !stats.converged {
-            tot.failure = Some(format!(
-                "step {} (t = {t}) did not converge: {}",
-                i + 1,
-                stats.reason
-            ));
-            return Ok(tot);
+            let tried = t - t_done;
+            dt = 0.5 * tried;
+            pc.invalidate();
+            if dt < ctl.min_step {
+                tot.failure = Some(format!(
+                    "step {} (t = {t}) did not converge: {}; the step was cut {retries} time(s) to {tried:.3e}, the minimum is {:.3e}",
+                    step + 1,
+                    stats.reason,
+                    ctl.min_step
+                ));
+                return Ok(tot);
+            }
+            retries += 1;
+            tot.retries += 1;
+            continue;
         }
         model.commit();
         *u = trial;
+        step += 1;
         tot.steps += 1;
+        let easy = stats.iterations <= ctl.easy_iterations;
         let rec = StepRecord {
-            step: i + 1,
+            step,
             time: t,
             reactions: model.reactions(comm, &r),
             stats,
-            retries: 0,
+            retries,
             wall_seconds: t0.elapsed().as_secs_f64(),
         };
         on_step(&rec, u, model)?;
+        if easy && retries == 0 {
+            dt = (dt * ctl.growth).min(ctl.max_step);
+        }
+        t_done = t;
+        retries = 0;
+        t0 = Instant::now();
     }
     tot.converged = true;
     Ok(tot)

@@ -38,6 +38,7 @@ pub fn try_run_deck(name: &str, text: &str) -> alfe::Result<RunOutcome> {
         partitions: dir.join("partitions"),
         repartition: false,
         quiet: true,
+        solver: None,
     };
     run(&SerialComm, &opts)
 }
