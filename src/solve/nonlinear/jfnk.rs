@@ -222,14 +222,6 @@ pub fn jfnk(
             return Ok(st);
         }
         st.iterations += 1;
-        if std::env::var_os("ALFE_DEBUG").is_some() && comm.rank() == 0 {
-            eprintln!(
-                "jfnk it {it}: rel {:.3e} eta {eta_k:.2e} lin {} fd {}",
-                ev.relative(),
-                st.linear_iterations,
-                st.fd_products
-            );
-        }
         let (next, lambda) = if opts.line_search && ev.gap == 0.0 {
             match line_search(comm, problem, u, r, &du, ev.rn, &cons, 6, &mut st)? {
                 Some(x) => x,

@@ -92,13 +92,6 @@ pub fn newton(
             return Ok(st);
         }
         st.iterations += 1;
-        if std::env::var_os("ALFE_DEBUG").is_some() && comm.rank() == 0 {
-            eprintln!(
-                "newton it {it}: rel {:.3e} lin {}",
-                ev.relative(),
-                st.linear_iterations
-            );
-        }
         // The iteration that imposes a prescribed increment takes the full step.
         let (next, lambda) = if opts.line_search && ev.gap == 0.0 {
             match line_search(comm, problem, u, r, &du, ev.rn, &cons, 6, &mut st)? {
