@@ -123,6 +123,7 @@ pub fn solver_options(
     let s = &def.solver;
     let kind = kind.unwrap_or(match s.nonlinear {
         NonlinearKind::Newton => SolverKind::Newton,
+        NonlinearKind::Bfgs => SolverKind::Bfgs,
         NonlinearKind::Jfnk => SolverKind::Jfnk,
     });
     NonlinearOptions {
@@ -138,7 +139,7 @@ pub fn solver_options(
         },
         block_jacobi: s.linear.preconditioner == PreconditionerKind::BlockJacobi,
         pc_lag: s.linear.lag,
-        bfgs_reform: 11,
+        bfgs_reform: s.bfgs_reform,
         fd_delta: s.fd_delta,
         fd_rule: match s.fd_step {
             FdStepDeck::Element => FdRule::Element,

@@ -16,7 +16,7 @@ usage:
       --partitions DIR   partition cache directory (default partitions)
       --repartition      recompute a cached partition instead of using it
       --quiet            no progress lines
-      --solver S         newton | jfnk (overrides the deck's [solver] nonlinear)
+      --solver S         newton | bfgs | jfnk (overrides the deck's [solver] nonlinear)
   alfe scenes                            list the built-in scenes
   alfe scene show NAME                   print a built-in scene's deck
   alfe check SCENE|DECK [--ranks N]      validate; print model size and partition quality
@@ -127,11 +127,11 @@ fn main_inner(comm: &dyn Comm, raw: &[String]) -> Result<()> {
             let solver = a
                 .get("solver")
                 .map(|s| {
-                    alfe::solve::nonlinear::SolverKind::parse(s)
-                        .filter(|k| *k != alfe::solve::nonlinear::SolverKind::Bfgs)
-                        .ok_or_else(|| {
-                            Error::input(format!("--solver: expected newton or jfnk, got `{s}`"))
-                        })
+                    alfe::solve::nonlinear::SolverKind::parse(s).ok_or_else(|| {
+                        Error::input(format!(
+                            "--solver: expected newton, bfgs or jfnk, got `{s}`"
+                        ))
+                    })
                 })
                 .transpose()?;
             let opts = RunOptions {
@@ -144,7 +144,7 @@ fn main_inner(comm: &dyn Comm, raw: &[String]) -> Result<()> {
             };
             let s = app::run(comm, &opts)?.summary;
             say(&format!(
-                "alfe: {} steps converged in {:.2} s ({} Newton, {} GMRES iterations); results in {}/ ({}.h5, {}.xmf, history.csv, summary.json)",
+                "alfe: {} steps converged in {:.2} s ({} nonlinear, {} GMRES iterations); results in {}/ ({}.h5, {}.xmf, history.csv, summary.json)",
                 s.steps, s.wall_time_s, s.nonlinear_iterations, s.linear_iterations, s.output_dir, s.scene, s.scene
             ));
             Ok(())

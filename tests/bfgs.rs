@@ -37,9 +37,10 @@ fn solve_with(
         partitions: dir.join("partitions"),
         repartition: false,
         quiet: true,
+        solver: None,
     };
     let (mut model, _) = setup(comm, &ro, &mut Phases::default()).unwrap();
-    let mut opts = solver_options(&model.local.settings, model.char_length(comm));
+    let mut opts = solver_options(&model.local.settings, model.char_length(comm), None);
     opts.kind = kind;
     opts.bfgs_reform = reform;
     let mut u = Vec::new();

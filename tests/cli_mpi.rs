@@ -222,48 +222,18 @@ fn cantilever_same_on_one_and_two_ranks_with_clamp_and_load_on_different_ranks()
 }
 
 /// The solver comparison scene: Newton on 1 rank and on 2 ranks agree (same iteration
-/// counts); JFNK on 2 ranks reaches the same final state to solver tolerance.
+/// counts); JFNK and BFGS on 2 ranks reach the same final state to solver tolerance.
 #[test]
-fn twisted_block_newton_and_jfnk_on_one_and_two_ranks() {
+fn twisted_block_all_solvers_on_one_and_two_ranks() {
     let dir = temp_dir("rank-twist");
     ok(alfe(
         &dir,
         1,
         &["run", "twisted-block", "--out", "n1", "--quiet"],
     ));
-    ok(alfe(
-        &dir,
-        2,
-        &[
-            "run",
-            "twisted-block",
-            "--out",
-            "n2",
-            "--partitions",
-            "parts",
-            "--quiet",
-        ],
-    ));
+    let two = ["run", "twisted-block", "--partitions", "parts", "--quiet"];
+    ok(alfe(&dir, 2, &[&two[..], &["--out", "n2"]].concat()));
     assert_same_runs(&dir.join("n1"), &dir.join("n2"), "twisted-block");
-    ok(alfe(
-        &dir,
-        2,
-        &[
-            "run",
-            "twisted-block",
-            "--solver",
-            "jfnk",
-            "--out",
-            "j2",
-            "--partitions",
-            "parts",
-            "--quiet",
-        ],
-    ));
-    let (a, b) = (
-        read_u(&dir.join("n1/twisted-block.h5")),
-        read_u(&dir.join("j2/twisted-block.h5")),
-    );
     let last = |v: &serde_json::Value| -> Vec<f64> {
         let o = v.as_object().unwrap();
         let k = o.keys().max().unwrap();
@@ -273,21 +243,32 @@ fn twisted_block_newton_and_jfnk_on_one_and_two_ranks() {
             .flat_map(|r| r.as_array().unwrap().iter().map(|x| x.as_f64().unwrap()))
             .collect()
     };
-    let (ua, ub) = (last(&a), last(&b));
+    let ua = last(&read_u(&dir.join("n1/twisted-block.h5")));
     let scale = ua.iter().map(|x| x.abs()).fold(0.0, f64::max);
-    let diff = ua
-        .iter()
-        .zip(&ub)
-        .map(|(x, y)| (x - y).abs())
-        .fold(0.0, f64::max);
-    assert!(
-        diff <= 1e-6 * scale,
-        "JFNK on 2 ranks vs Newton: {diff:e} of {scale:e}"
-    );
-    let s: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(dir.join("j2/summary.json")).unwrap())
-            .unwrap();
-    assert_eq!(s["solver"], "jfnk");
+    for solver in ["jfnk", "bfgs"] {
+        let out = format!("{solver}2");
+        ok(alfe(
+            &dir,
+            2,
+            &[&two[..], &["--out", &out, "--solver", solver]].concat(),
+        ));
+        let ub = last(&read_u(&dir.join(&out).join("twisted-block.h5")));
+        let diff = ua
+            .iter()
+            .zip(&ub)
+            .map(|(x, y)| (x - y).abs())
+            .fold(0.0, f64::max);
+        assert!(
+            diff <= 1e-6 * scale,
+            "{solver} on 2 ranks vs Newton: {diff:e} of {scale:e}"
+        );
+        let s: serde_json::Value = serde_json::from_str(
+            &std::fs::read_to_string(dir.join(&out).join("summary.json")).unwrap(),
+        )
+        .unwrap();
+        assert_eq!(s["solver"], solver);
+        assert_eq!(s["converged"], true);
+    }
 }
 
 #[test]

@@ -495,6 +495,9 @@ pub fn build(deck: &Deck, deck_dir: &Path) -> Result<ModelDef> {
             ));
         }
     }
+    if s.bfgs_reform == 0 {
+        return Err(err("solver.bfgs_reform", "expected at least 1"));
+    }
     if !(s.fd_delta > 0.0 && s.fd_delta < 1.0) {
         return Err(err(
             "solver.fd_delta",

@@ -287,6 +287,8 @@ pub enum NonlinearKind {
     /// Full Newton: assembled Jacobian and a fresh factorization every iteration.
     #[default]
     Newton,
+    /// Matthies–Strang BFGS on a stiffness reformed every `bfgs_reform` iterations.
+    Bfgs,
     /// Jacobian-free Newton–Krylov with a block-Jacobi preconditioner lagged per step.
     Jfnk,
 }
@@ -337,6 +339,13 @@ pub struct SolverDeck {
     /// JFNK: the rule for the finite-difference step.
     #[serde(default)]
     pub fd_step: FdStepDeck,
+    /// BFGS: reassemble and refactor the stiffness every n iterations (and on divergence).
+    #[serde(default = "d_bfgs_reform")]
+    pub bfgs_reform: usize,
+}
+
+fn d_bfgs_reform() -> usize {
+    11
 }
 
 fn d_fd_delta() -> f64 {
@@ -364,6 +373,7 @@ impl Default for SolverDeck {
             line_search: None,
             fd_delta: d_fd_delta(),
             fd_step: FdStepDeck::Element,
+            bfgs_reform: d_bfgs_reform(),
         }
     }
 }
