@@ -131,6 +131,7 @@ pub fn solver_options(
         max_iterations: s.max_iterations,
         residual_rtol: s.residual_rtol,
         increment_rtol: s.increment_rtol,
+        energy_rtol: s.energy_rtol,
         linear: GmresOptions {
             rtol: s.linear.rtol,
             atol: 0.0,

@@ -149,7 +149,7 @@ impl ResultsWriter {
                 for s in &l.reaction_sets {
                     head.push_str(&format!(",{s}.fx,{s}.fy,{s}.fz"));
                 }
-                head.push_str(",residual_evaluations,factorizations,final_relative_residual");
+                head.push_str(",residual_evaluations,factorizations,final_relative_residual,assembly_s,linear_s");
                 writeln!(f, "{head}")?;
                 history = Some(f);
                 Ok(())
@@ -202,10 +202,12 @@ impl ResultsWriter {
                 row.push_str(&format!(",{:.12e},{:.12e},{:.12e}", f3[0], f3[1], f3[2]));
             }
             row.push_str(&format!(
-                ",{},{},{:.3e}",
+                ",{},{},{:.3e},{:.6},{:.6}",
                 s.residual_evaluations,
                 s.factorizations,
-                s.residual_history.last().copied().unwrap_or(0.0)
+                s.residual_history.last().copied().unwrap_or(0.0),
+                s.seconds_assembly,
+                s.seconds_linear
             ));
             writeln!(f, "{row}")
                 .and_then(|_| f.flush())

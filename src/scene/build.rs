@@ -486,6 +486,7 @@ pub fn build(deck: &Deck, deck_dir: &Path) -> Result<ModelDef> {
     for (name, v) in [
         ("solver.residual_rtol", s.residual_rtol),
         ("solver.increment_rtol", s.increment_rtol),
+        ("solver.energy_rtol", s.energy_rtol),
         ("solver.linear.rtol", s.linear.rtol),
     ] {
         if !(v > 0.0 && v < 1.0) {

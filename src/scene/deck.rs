@@ -312,9 +312,10 @@ pub enum PreconditionerKind {
     None,
 }
 
-/// Nonlinear solver settings. Convergence (both must hold): ‖r‖ ≤ residual_rtol · f_ref
-/// with f_ref = max(‖f_ext‖, ‖f_int‖) over all unknowns (so reactions count), and the
-/// last correction ‖Δu‖ ≤ increment_rtol · ‖u‖.
+/// Nonlinear solver settings. Convergence (all must hold): ‖r‖ ≤ residual_rtol · f_ref
+/// with f_ref = max(‖f_ext‖, ‖f_int‖) over all unknowns (so reactions count), the last
+/// correction ‖Δu‖ ≤ increment_rtol · ‖u‖, and its energy |Δu·r| ≤ energy_rtol times the
+/// largest correction energy of the step.
 #[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct SolverDeck {
@@ -326,6 +327,9 @@ pub struct SolverDeck {
     pub residual_rtol: f64,
     #[serde(default = "d_urtol")]
     pub increment_rtol: f64,
+    /// Last correction's energy |Δu·r| relative to the largest of the step.
+    #[serde(default = "d_ertol")]
+    pub energy_rtol: f64,
     #[serde(default)]
     pub linear: LinearDeck,
     /// Backtracking (Armijo) line search on ‖r_free‖, off by default: on the large-rotation
@@ -361,6 +365,9 @@ fn d_rrtol() -> f64 {
 fn d_urtol() -> f64 {
     1e-6
 }
+fn d_ertol() -> f64 {
+    1e-8
+}
 
 impl Default for SolverDeck {
     fn default() -> Self {
@@ -369,6 +376,7 @@ impl Default for SolverDeck {
             max_iterations: d_max_it(),
             residual_rtol: d_rrtol(),
             increment_rtol: d_urtol(),
+            energy_rtol: d_ertol(),
             linear: LinearDeck::default(),
             line_search: None,
             fd_delta: d_fd_delta(),

@@ -42,9 +42,9 @@
 //!   taken, as Newton without a line search does.
 //!
 //! Convergence, failure reasons and statistics are those of the other solvers
-//! (`common::evaluate`, `common::verdict`); `iterations` counts search directions.
+//! (`common::evaluate`, `common::Monitor`); `iterations` counts search directions.
 
-use super::common::{evaluate, precond_solve, verdict, Constraints, Eval, Verdict};
+use super::common::{evaluate, precond_solve, Constraints, Eval, Monitor, Verdict};
 use super::{NonlinearOptions, NonlinearProblem, SolveStats};
 use crate::parallel::Comm;
 use crate::solve::linear::lagged::LaggedBlockJacobi;
@@ -338,7 +338,7 @@ fn run(
     // r on the free dofs at the current accepted point.
     let mut rf = r.to_vec();
     cons.zero_constrained(&mut rf);
-    let mut last_du = f64::INFINITY;
+    let mut monitor = Monitor::default();
     // K not yet assembled for this step.
     let mut need_reform = true;
     // Directions computed since the last reform.
@@ -347,7 +347,7 @@ fn run(
     let mut k_at_current = false;
     st.residual_history.push(ev.relative());
     loop {
-        match verdict(&ev, st.iterations, last_du, scale, opts) {
+        match monitor.verdict(&ev, st.iterations, scale, opts) {
             Verdict::Converged => {
                 st.converged = true;
                 return Ok(st);
@@ -408,7 +408,7 @@ fn run(
                 None => return Ok(st),
             };
             st.residual_history.push(ev.relative());
-            last_du = comm.norm2(&d);
+            monitor.record(Monitor::measure(comm, &d, &rf, &cons.is_c), 1.0);
             rf.copy_from_slice(r);
             cons.zero_constrained(&mut rf);
             k_at_current = false;
@@ -482,7 +482,8 @@ fn run(
         // The pair, ‖s‖ and the first loop's s_iᵀ r in one reduction.
         let (sn, _, a_new) = pairs.offer(comm, s, y, &rf);
         a = a_new;
-        last_du = sn;
+        // ‖s‖ = λ‖d‖ and the energy λ|dᵀr| of the correction taken.
+        monitor.record((sn / lambda, g0.abs()), lambda);
         k_at_current = false;
     }
 }

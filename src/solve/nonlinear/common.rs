@@ -118,31 +118,106 @@ pub enum Verdict {
     Fail(String),
 }
 
-/// The convergence test (module doc of `newton`): residual and last correction small,
-/// prescribed values reached; divergence, non-finite values and the budget end it.
-pub fn verdict(ev: &Eval, it: usize, last_du: f64, scale: f64, opts: &NonlinearOptions) -> Verdict {
-    let small_r = ev.rn <= opts.residual_rtol * ev.f_ref;
-    let small_du = it == 0 || last_du <= opts.increment_rtol * ev.un;
-    if small_r && small_du && ev.gap == 0.0 {
-        return Verdict::Converged;
+/// Iterations over which the residual must fall by 10% before a solve is stagnating:
+/// half the iteration budget, at least this many (BFGS's residual can plateau for ~10
+/// iterations on the cantilever and then converge).
+pub const STAGNATION_WINDOW: usize = 8;
+
+/// What the convergence test remembers across the iterations of one step: the last
+/// correction's norm and energy, the largest correction energy, and the best residual
+/// (for stagnation).
+#[derive(Debug, Clone)]
+pub struct Monitor {
+    last_du: f64,
+    last_energy: f64,
+    max_energy: f64,
+    best: f64,
+    best_at: usize,
+}
+
+impl Default for Monitor {
+    fn default() -> Self {
+        Self {
+            last_du: f64::INFINITY,
+            last_energy: f64::INFINITY,
+            max_energy: 0.0,
+            best: f64::INFINITY,
+            best_at: 0,
+        }
     }
-    if !ev.rn.is_finite() {
-        return Verdict::Fail("the residual is not finite".into());
+}
+
+impl Monitor {
+    /// ‖du‖ and the energy |du_free · r_free| of a full correction `du` taken from a point
+    /// whose residual is `r` (one reduction). Pass the result to [`Monitor::record`].
+    pub fn measure(comm: &dyn Comm, du: &[f64], r: &[f64], is_c: &[bool]) -> (f64, f64) {
+        let mut s = [0.0, 0.0];
+        for i in 0..du.len() {
+            s[0] += du[i] * du[i];
+            if !is_c[i] {
+                s[1] += du[i] * r[i];
+            }
+        }
+        comm.allreduce_sum(&mut s);
+        (s[0].sqrt(), s[1].abs())
     }
-    if it > 0 && scale > 0.0 && ev.rn > DIVERGENCE_FACTOR * scale {
-        return Verdict::Fail(format!(
-            "diverged: residual grew to {:.3e} (force scale {scale:.3e})",
-            ev.rn
-        ));
+    /// The correction actually taken was `lambda` times the measured one.
+    pub fn record(&mut self, measured: (f64, f64), lambda: f64) {
+        self.last_du = lambda * measured.0;
+        self.last_energy = lambda * measured.1;
+        self.max_energy = self.max_energy.max(self.last_energy);
     }
-    if it >= opts.max_iterations {
-        return Verdict::Fail(format!(
-            "no convergence in {} iterations (relative residual {:.3e})",
-            opts.max_iterations,
-            ev.relative()
-        ));
+
+    /// The convergence test. Converged when all hold: ‖r_free‖ ≤ residual_rtol·f_ref, the
+    /// last correction ‖Δu‖ ≤ increment_rtol·‖u‖, its energy |Δu·r| ≤ energy_rtol times
+    /// the largest correction energy of the step, and the prescribed values are reached
+    /// (a zero residual before any correction needs none). Fails on a non-finite or
+    /// diverging residual, on stagnation (no 10% decrease in max([`STAGNATION_WINDOW`],
+    /// max_iterations/2) iterations) and at the iteration budget.
+    pub fn verdict(
+        &mut self,
+        ev: &Eval,
+        it: usize,
+        scale: f64,
+        opts: &NonlinearOptions,
+    ) -> Verdict {
+        let small_r = ev.rn <= opts.residual_rtol * ev.f_ref;
+        let small_du = it == 0 || self.last_du <= opts.increment_rtol * ev.un;
+        let small_e = it == 0 || self.last_energy <= opts.energy_rtol * self.max_energy;
+        if small_r && small_du && small_e && ev.gap == 0.0 {
+            return Verdict::Converged;
+        }
+        if !ev.rn.is_finite() {
+            return Verdict::Fail("the residual is not finite".into());
+        }
+        if it > 0 && scale > 0.0 && ev.rn > DIVERGENCE_FACTOR * scale {
+            return Verdict::Fail(format!(
+                "diverged: residual grew to {:.3e} (force scale {scale:.3e})",
+                ev.rn
+            ));
+        }
+        if it >= opts.max_iterations {
+            return Verdict::Fail(format!(
+                "no convergence in {} iterations (relative residual {:.3e})",
+                opts.max_iterations,
+                ev.relative()
+            ));
+        }
+        // Stagnation, counted from the first point without a pending prescribed increment.
+        let window = STAGNATION_WINDOW.max(opts.max_iterations / 2);
+        if ev.gap == 0.0 {
+            if ev.rn < 0.9 * self.best {
+                self.best = ev.rn;
+                self.best_at = it;
+            } else if self.best.is_finite() && it >= self.best_at + window && !small_r {
+                return Verdict::Fail(format!(
+                    "stagnated: the residual did not fall by 10% in {window} iterations (relative residual {:.3e})",
+                    ev.relative()
+                ));
+            }
+        }
+        Verdict::Continue
     }
-    Verdict::Continue
 }
 
 /// Solve `a x = b` by GMRES preconditioned with the (possibly kept) block-Jacobi
@@ -234,4 +309,88 @@ pub fn line_search(
         lambda *= 0.5;
     }
     unreachable!()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::solve::nonlinear::{FdRule, SolverKind};
+
+    fn opts() -> NonlinearOptions {
+        NonlinearOptions {
+            kind: SolverKind::Newton,
+            max_iterations: 25,
+            residual_rtol: 1e-8,
+            increment_rtol: 1e-6,
+            energy_rtol: 1e-8,
+            linear: GmresOptions::default(),
+            block_jacobi: true,
+            pc_lag: 0,
+            bfgs_reform: 11,
+            fd_delta: 1e-4,
+            fd_rule: FdRule::Element,
+            char_length: 1.0,
+            line_search: false,
+        }
+    }
+    fn ev(rn: f64) -> Eval {
+        Eval {
+            rn,
+            f_ref: 1.0,
+            gap: 0.0,
+            un: 1.0,
+        }
+    }
+
+    #[test]
+    fn all_three_criteria_must_hold() {
+        let o = opts();
+        let mut m = Monitor::default();
+        m.record((1.0, 1.0), 1.0);
+        // Small residual and increment, but the last correction's energy is the largest.
+        m.record((1e-9, 1.0), 1.0);
+        assert!(matches!(
+            m.verdict(&ev(1e-10), 2, 1.0, &o),
+            Verdict::Continue
+        ));
+        m.record((1e-9, 1e-12), 1.0);
+        assert!(matches!(
+            m.verdict(&ev(1e-10), 3, 1.0, &o),
+            Verdict::Converged
+        ));
+        // A pending prescribed increment is never converged.
+        let mut g = ev(0.0);
+        g.gap = 1e-3;
+        assert!(matches!(
+            Monitor::default().verdict(&g, 0, 1.0, &o),
+            Verdict::Continue
+        ));
+    }
+
+    #[test]
+    fn stagnation_and_divergence_end_the_solve() {
+        let o = opts();
+        let mut m = Monitor::default();
+        let mut verdicts = Vec::new();
+        for it in 0..20 {
+            m.record((1.0, 1.0), 1.0);
+            verdicts.push(m.verdict(&ev(0.5), it, 1.0, &o));
+        }
+        let first_fail = verdicts
+            .iter()
+            .position(|v| matches!(v, Verdict::Fail(_)))
+            .unwrap();
+        assert_eq!(
+            first_fail, 12,
+            "half the budget of 25 iterations without a 10% decrease"
+        );
+        let mut m = Monitor::default();
+        assert!(
+            matches!(m.verdict(&ev(1e9), 1, 1.0, &o), Verdict::Fail(w) if w.contains("diverged"))
+        );
+        assert!(matches!(
+            m.verdict(&ev(f64::NAN), 1, 1.0, &o),
+            Verdict::Fail(_)
+        ));
+    }
 }

@@ -14,7 +14,7 @@
 //! * Prescribed dofs as in Newton: Δu_c = g − u_c exactly; the coupling K_fc (g − u_c) on
 //!   the right-hand side is itself one finite-difference product.
 
-use super::common::{evaluate, line_search, verdict, Constraints, Eval, Verdict};
+use super::common::{evaluate, line_search, Constraints, Eval, Monitor, Verdict};
 use super::{FdRule, NonlinearOptions, NonlinearProblem, SolveStats};
 use crate::parallel::Comm;
 use crate::solve::linear::gmres::{gmres, GmresOptions};
@@ -180,13 +180,13 @@ pub fn jfnk(
         return Ok(st);
     };
     let scale = ev.rn.max(ev.f_ref);
-    let mut last_du = f64::INFINITY;
+    let mut monitor = Monitor::default();
     let (eta_max, gamma, alpha) = (ETA_MAX, 0.9, 2.0);
     let mut eta = ETA_0;
     let mut prev_rn = f64::NAN;
     for it in 0.. {
         st.residual_history.push(ev.relative());
-        match verdict(&ev, it, last_du, scale, opts) {
+        match monitor.verdict(&ev, it, scale, opts) {
             Verdict::Converged => {
                 st.converged = true;
                 return Ok(st);
@@ -222,6 +222,7 @@ pub fn jfnk(
             return Ok(st);
         }
         st.iterations += 1;
+        let measured = Monitor::measure(comm, &du, r, &cons.is_c);
         let (next, lambda) = if opts.line_search && ev.gap == 0.0 {
             match line_search(comm, problem, u, r, &du, ev.rn, &cons, 6, &mut st)? {
                 Some(x) => x,
@@ -237,7 +238,7 @@ pub fn jfnk(
             }
         };
         ev = next;
-        last_du = lambda * comm.norm2(&du);
+        monitor.record(measured, lambda);
     }
     unreachable!("the loop returns")
 }

@@ -63,6 +63,8 @@ pub struct NonlinearOptions {
     pub max_iterations: usize,
     pub residual_rtol: f64,
     pub increment_rtol: f64,
+    /// Last correction energy |Δu·r| relative to the step's largest.
+    pub energy_rtol: f64,
     /// GMRES settings: the tolerance for Newton and BFGS solves; JFNK's tolerance is the
     /// Eisenstat–Walker forcing term (never below this).
     pub linear: GmresOptions,

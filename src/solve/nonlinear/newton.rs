@@ -1,13 +1,13 @@
 //! Full Newton with the assembled (generalized) Jacobian at every iteration and GMRES +
 //! block Jacobi inner solves (the factorization refreshed per iteration unless lagged).
 //!
-//! Convergence (both): ‖r_free‖ ≤ residual_rtol · f_ref and ‖Δu‖ ≤ increment_rtol · ‖u‖
-//! for the last correction (a zero residual at the start of a step needs no correction).
+//! Convergence: residual, increment and energy tests together ([`super::common::Monitor`]);
+//! a zero residual at the start of a step needs no correction.
 //! Prescribed dofs: each linear solve imposes Δu_c = g − u_c exactly and moves the
 //! coupling −K_fc (g − u_c) to the right-hand side, so a large prescribed increment is
 //! linearised consistently instead of being forced into the first residual.
 
-use super::common::{evaluate, line_search, precond_solve, verdict, Constraints, Verdict};
+use super::common::{evaluate, line_search, precond_solve, Constraints, Monitor, Verdict};
 use super::{NonlinearOptions, NonlinearProblem, SolveStats};
 use crate::parallel::Comm;
 use crate::solve::linear::lagged::LaggedBlockJacobi;
@@ -39,10 +39,10 @@ pub fn newton(
         return Ok(st);
     };
     let scale = ev.rn.max(ev.f_ref);
-    let mut last_du = f64::INFINITY;
+    let mut monitor = Monitor::default();
     for it in 0.. {
         st.residual_history.push(ev.relative());
-        match verdict(&ev, it, last_du, scale, opts) {
+        match monitor.verdict(&ev, it, scale, opts) {
             Verdict::Converged => {
                 st.converged = true;
                 return Ok(st);
@@ -92,6 +92,7 @@ pub fn newton(
             return Ok(st);
         }
         st.iterations += 1;
+        let measured = Monitor::measure(comm, &du, r, &cons.is_c);
         // The iteration that imposes a prescribed increment takes the full step.
         let (next, lambda) = if opts.line_search && ev.gap == 0.0 {
             match line_search(comm, problem, u, r, &du, ev.rn, &cons, 6, &mut st)? {
@@ -108,7 +109,7 @@ pub fn newton(
             }
         };
         ev = next;
-        last_du = lambda * comm.norm2(&du);
+        monitor.record(measured, lambda);
     }
     unreachable!("the loop returns")
 }
