@@ -130,7 +130,9 @@ pub fn bench_linear(comm: &dyn Comm, cells: Option<&str>, rtol: Option<&str>, js
     let true_rel = comm.norm2(&res) / comm.norm2(&b);
     // HDF5 write bandwidth: displacement + a stress-sized array, collectively.
     let dir = json.map(|j| Path::new(j).parent().unwrap_or(Path::new(".")).to_path_buf()).unwrap_or_else(std::env::temp_dir);
-    let h5path = dir.join(format!("bench-linear-{}.h5", std::process::id()));
+    // One name on every rank (rank 0's pid): a collective create of different names hangs.
+    let pid0 = comm.allgather_f64(std::process::id() as f64)[0] as u64;
+    let h5path = dir.join(format!("bench-linear-{pid0}.h5"));
     let stress = vec![1.0f64; 6 * model.local.n_elems()];
     comm.barrier();
     let t = Instant::now();
@@ -169,6 +171,9 @@ pub fn bench_linear(comm: &dyn Comm, cells: Option<&str>, rtol: Option<&str>, js
         "residual_elems_per_s_per_rank_min": min_elems / t_res,
         "jacobian_s": t_jac,
         "jacobian_elems_per_s_per_rank": max_elems / t_jac,
+        "owned_dofs_per_rank": comm.allgather_f64(n as f64),
+        "factorization": format!("{:?}", pc.kind()),
+        "symbolic_s_per_rank": comm.allgather_f64(pc.symbolic_seconds()),
         "factor_first_s": t_factor_first,
         "refactor_s": t_refactor,
         "gmres_s": t_gmres,
