@@ -311,6 +311,42 @@ pub fn line_search(
     unreachable!()
 }
 
+/// Take the correction `du` from `u` (residual `r`, evaluation `ev`): the backtracking line
+/// search if asked for, else the full step (always the full step on an iteration that
+/// imposes a prescribed increment), then record it in `monitor`. On return `u` and `r`
+/// hold the new point; `Ok(None)`: it could not be evaluated (reason in `st`).
+#[allow(clippy::too_many_arguments)]
+pub fn take_step(
+    comm: &dyn Comm,
+    problem: &mut dyn NonlinearProblem,
+    u: &mut [f64],
+    r: &mut [f64],
+    du: &[f64],
+    ev: &Eval,
+    cons: &Constraints,
+    line_search_on: bool,
+    monitor: &mut Monitor,
+    st: &mut SolveStats,
+) -> Result<Option<Eval>> {
+    let measured = Monitor::measure(comm, du, r, &cons.is_c);
+    let (next, lambda) = if line_search_on && ev.gap == 0.0 {
+        match line_search(comm, problem, u, r, du, ev.rn, cons, 6, st)? {
+            Some(x) => x,
+            None => return Ok(None),
+        }
+    } else {
+        for (x, d) in u.iter_mut().zip(du) {
+            *x += d;
+        }
+        match evaluate(comm, problem, u, r, cons, st)? {
+            Some(e) => (e, 1.0),
+            None => return Ok(None),
+        }
+    };
+    monitor.record(measured, lambda);
+    Ok(Some(next))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

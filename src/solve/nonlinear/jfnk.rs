@@ -14,7 +14,7 @@
 //! * Prescribed dofs as in Newton: Δu_c = g − u_c exactly; the coupling K_fc (g − u_c) on
 //!   the right-hand side is itself one finite-difference product.
 
-use super::common::{evaluate, line_search, Constraints, Eval, Monitor, Verdict};
+use super::common::{evaluate, take_step, Constraints, Eval, Monitor, Verdict};
 use super::{FdRule, NonlinearOptions, NonlinearProblem, SolveStats};
 use crate::parallel::Comm;
 use crate::solve::linear::gmres::{gmres, GmresOptions};
@@ -222,23 +222,21 @@ pub fn jfnk(
             return Ok(st);
         }
         st.iterations += 1;
-        let measured = Monitor::measure(comm, &du, r, &cons.is_c);
-        let (next, lambda) = if opts.line_search && ev.gap == 0.0 {
-            match line_search(comm, problem, u, r, &du, ev.rn, &cons, 6, &mut st)? {
-                Some(x) => x,
-                None => return Ok(st),
-            }
-        } else {
-            for i in 0..n {
-                u[i] += du[i];
-            }
-            match evaluate(comm, problem, u, r, &cons, &mut st)? {
-                Some(e) => (e, 1.0),
-                None => return Ok(st),
-            }
-        };
-        ev = next;
-        monitor.record(measured, lambda);
+        match take_step(
+            comm,
+            problem,
+            u,
+            r,
+            &du,
+            &ev,
+            &cons,
+            opts.line_search,
+            &mut monitor,
+            &mut st,
+        )? {
+            Some(next) => ev = next,
+            None => return Ok(st),
+        }
     }
     unreachable!("the loop returns")
 }

@@ -7,7 +7,7 @@
 //! coupling −K_fc (g − u_c) to the right-hand side, so a large prescribed increment is
 //! linearised consistently instead of being forced into the first residual.
 
-use super::common::{evaluate, line_search, precond_solve, Constraints, Monitor, Verdict};
+use super::common::{evaluate, precond_solve, take_step, Constraints, Monitor, Verdict};
 use super::{NonlinearOptions, NonlinearProblem, SolveStats};
 use crate::parallel::Comm;
 use crate::solve::linear::lagged::LaggedBlockJacobi;
@@ -92,24 +92,21 @@ pub fn newton(
             return Ok(st);
         }
         st.iterations += 1;
-        let measured = Monitor::measure(comm, &du, r, &cons.is_c);
-        // The iteration that imposes a prescribed increment takes the full step.
-        let (next, lambda) = if opts.line_search && ev.gap == 0.0 {
-            match line_search(comm, problem, u, r, &du, ev.rn, &cons, 6, &mut st)? {
-                Some(x) => x,
-                None => return Ok(st),
-            }
-        } else {
-            for i in 0..n {
-                u[i] += du[i];
-            }
-            match evaluate(comm, problem, u, r, &cons, &mut st)? {
-                Some(e) => (e, 1.0),
-                None => return Ok(st),
-            }
-        };
-        ev = next;
-        monitor.record(measured, lambda);
+        match take_step(
+            comm,
+            problem,
+            u,
+            r,
+            &du,
+            &ev,
+            &cons,
+            opts.line_search,
+            &mut monitor,
+            &mut st,
+        )? {
+            Some(next) => ev = next,
+            None => return Ok(st),
+        }
     }
     unreachable!("the loop returns")
 }
