@@ -187,37 +187,7 @@ impl Model {
         let nl = u_local.len();
         let mut f_int = vec![0.0; nl];
         let mut f_ext = vec![0.0; nl];
-        let mut failure: Option<String> = None;
-        let mut x0 = [[0.0; 3]; 8];
-        let mut ue = [[0.0; 3]; 8];
-        let mut fe = [0.0; 24];
-        for e in 0..self.local.n_elems() {
-            let n = self.elem_coords(e, &u_local, &mut x0, &mut ue);
-            let mat = self.materials[self.local.elem_material[e] as usize].as_ref();
-            let (s0, s1) = (self.state_offset[e], self.state_offset[e + 1]);
-            let res = element_force(
-                self.local.kinds[e],
-                &x0[..n],
-                &ue[..n],
-                mat,
-                &self.state_old[s0..s1],
-                &mut self.state_new[s0..s1],
-                &mut fe[..3 * n],
-                None,
-            );
-            if let Err(err) = res {
-                failure.get_or_insert_with(|| {
-                    format!("element {}: {}", self.local.orig_elem[e], err.0)
-                });
-                continue;
-            }
-            for (a, &node) in self.local.elem_nodes(e).iter().enumerate() {
-                for k in 0..3 {
-                    f_int[3 * node + k] += fe[3 * a + k];
-                }
-            }
-        }
-        self.element_evaluations += self.local.n_elems() as u64;
+        let failure = self.element_pass(&u_local, Some(&mut f_int), None);
         self.external_forces(&u_local, t, &mut f_ext, None);
         // Sum ghost contributions on the owners.
         let no = u_owned.len();
@@ -242,6 +212,60 @@ impl Model {
         Ok(ResidualInfo {
             f_ref: sums[0].sqrt().max(sums[1].sqrt()),
         })
+    }
+
+    /// One loop over the local elements at `u_local`: internal forces into `f_int`
+    /// and/or element tangents into `k`. Returns the first element failure (an
+    /// inverted element), which the caller agrees on across ranks.
+    fn element_pass(
+        &mut self,
+        u_local: &[f64],
+        mut f_int: Option<&mut [f64]>,
+        mut k: Option<&mut DistMatrix>,
+    ) -> Option<String> {
+        let mut failure: Option<String> = None;
+        let mut x0 = [[0.0; 3]; 8];
+        let mut ue = [[0.0; 3]; 8];
+        let mut fe = [0.0; 24];
+        let mut ke = vec![0.0; if k.is_some() { 576 } else { 0 }];
+        let mut blocks = [0usize; 8];
+        for e in 0..self.local.n_elems() {
+            let n = self.elem_coords(e, u_local, &mut x0, &mut ue);
+            let mat = self.materials[self.local.elem_material[e] as usize].as_ref();
+            let (s0, s1) = (self.state_offset[e], self.state_offset[e + 1]);
+            let res = element_force(
+                self.local.kinds[e],
+                &x0[..n],
+                &ue[..n],
+                mat,
+                &self.state_old[s0..s1],
+                &mut self.state_new[s0..s1],
+                &mut fe[..3 * n],
+                k.as_ref().map(|_| &mut ke[..9 * n * n]),
+            );
+            if let Err(err) = res {
+                failure.get_or_insert_with(|| {
+                    format!("element {}: {}", self.local.orig_elem[e], err.0)
+                });
+                continue;
+            }
+            let nodes = self.local.elem_nodes(e);
+            if let Some(f) = f_int.as_deref_mut() {
+                for (a, &node) in nodes.iter().enumerate() {
+                    for c in 0..3 {
+                        f[3 * node + c] += fe[3 * a + c];
+                    }
+                }
+            }
+            if let Some(kmat) = k.as_deref_mut() {
+                for (a, &node) in nodes.iter().enumerate() {
+                    blocks[a] = self.node_block[node];
+                }
+                kmat.add_element(&blocks[..n], &ke[..9 * n * n]);
+            }
+        }
+        self.element_evaluations += self.local.n_elems() as u64;
+        failure
     }
 
     /// External forces at time t into `f` (local dofs); if `k` is given, the load
@@ -386,38 +410,7 @@ impl Model {
         let mut u_local = std::mem::take(&mut self.work);
         self.gather(comm, u_owned, &mut u_local);
         k.zero();
-        let mut failure: Option<String> = None;
-        let mut x0 = [[0.0; 3]; 8];
-        let mut ue = [[0.0; 3]; 8];
-        let mut fe = [0.0; 24];
-        let mut ke = vec![0.0; 576];
-        let mut blocks = [0usize; 8];
-        for e in 0..self.local.n_elems() {
-            let n = self.elem_coords(e, &u_local, &mut x0, &mut ue);
-            let mat = self.materials[self.local.elem_material[e] as usize].as_ref();
-            let (s0, s1) = (self.state_offset[e], self.state_offset[e + 1]);
-            let res = element_force(
-                self.local.kinds[e],
-                &x0[..n],
-                &ue[..n],
-                mat,
-                &self.state_old[s0..s1],
-                &mut self.state_new[s0..s1],
-                &mut fe[..3 * n],
-                Some(&mut ke[..9 * n * n]),
-            );
-            if let Err(err) = res {
-                failure.get_or_insert_with(|| {
-                    format!("element {}: {}", self.local.orig_elem[e], err.0)
-                });
-                continue;
-            }
-            for (a, &node) in self.local.elem_nodes(e).iter().enumerate() {
-                blocks[a] = self.node_block[node];
-            }
-            k.add_element(&blocks[..n], &ke[..9 * n * n]);
-        }
-        self.element_evaluations += self.local.n_elems() as u64;
+        let failure = self.element_pass(&u_local, None, Some(k));
         let mut scratch = vec![0.0; u_local.len()];
         self.external_forces(&u_local, t, &mut scratch, Some(k));
         k.finish_assembly(comm);
