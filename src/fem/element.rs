@@ -34,6 +34,24 @@ impl fmt::Display for ElementError {
 
 impl std::error::Error for ElementError {}
 
+/// How the element treats volume change.
+///
+/// * `Standard`: full 2×2×2 integration of F; hex8 locks when the material is nearly
+///   incompressible or the flow is isochoric (the constraint J = 1 at 8 points).
+/// * `FBar`: F̄ = (J̄/J)^{1/3} F at every point with J̄ = v/V, the element's volume ratio
+///   (de Souza Neto, Perić & Owen, *Computational Methods for Plasticity*, §15.2, with
+///   the mean-dilatation choice of J̄, which makes the volumetric part one constant per
+///   element as in Q1/P0, Simo–Taylor–Pister 1985). Small kinematics uses the same idea
+///   as B-bar: ε̄ = ε + (θ̄ − tr ε)/3 I with θ̄ the volume average of tr ε (Hughes §4.5).
+///   The consistent tangent gains the non-symmetric term of de Souza Neto eq. 15.20.
+///   Only hex8 changes; a one-point tet4 is the same either way.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+pub enum Formulation {
+    #[default]
+    Standard,
+    FBar,
+}
+
 /// Number of integration points of the kind's rule (history is stored per point).
 pub fn n_gauss(kind: ElemKind) -> usize {
     match kind {
@@ -49,6 +67,8 @@ pub fn n_gauss(kind: ElemKind) -> usize {
 /// `state_old`/`state_new`: `n_gauss(kind) * mat.n_state()` history values (empty for
 /// elastic models). `f` and `k` are overwritten, not accumulated.
 ///
+/// `form` selects F-bar for hex8 (see [`Formulation`]).
+///
 /// Finite kinematics: det F ≤ 0 at a point is an error. Small kinematics never checks
 /// det F: a linear model is defined for any displacement, and Newton's first trial on a
 /// linear problem may overshoot without meaning anything.
@@ -58,6 +78,7 @@ pub fn n_gauss(kind: ElemKind) -> usize {
 #[allow(clippy::too_many_arguments)]
 pub fn element_force(
     kind: ElemKind,
+    form: Formulation,
     x0: &[[f64; 3]],
     u: &[[f64; 3]],
     mat: &dyn Material,
@@ -67,8 +88,28 @@ pub fn element_force(
     k: Option<&mut [f64]>,
 ) -> Result<(), ElementError> {
     match kind {
-        ElemKind::Hex8 => force_kernel(&HEX8, nodes(x0), nodes(u), mat, state_old, state_new, f, k),
-        ElemKind::Tet4 => force_kernel(&TET4, nodes(x0), nodes(u), mat, state_old, state_new, f, k),
+        ElemKind::Hex8 => force_kernel(
+            &HEX8,
+            form == Formulation::FBar,
+            nodes(x0),
+            nodes(u),
+            mat,
+            state_old,
+            state_new,
+            f,
+            k,
+        ),
+        ElemKind::Tet4 => force_kernel(
+            &TET4,
+            false,
+            nodes(x0),
+            nodes(u),
+            mat,
+            state_old,
+            state_new,
+            f,
+            k,
+        ),
     }
 }
 
@@ -76,14 +117,22 @@ pub fn element_force(
 /// (1/v) ∫ σ dv = Σ τ w det J₀ / Σ J w det J₀ (finite), or the plain average of σ (small).
 pub fn element_stress(
     kind: ElemKind,
+    form: Formulation,
     x0: &[[f64; 3]],
     u: &[[f64; 3]],
     mat: &dyn Material,
     state_old: &[f64],
 ) -> Result<[f64; 6], ElementError> {
     match kind {
-        ElemKind::Hex8 => stress_kernel(&HEX8, nodes(x0), nodes(u), mat, state_old),
-        ElemKind::Tet4 => stress_kernel(&TET4, nodes(x0), nodes(u), mat, state_old),
+        ElemKind::Hex8 => stress_kernel(
+            &HEX8,
+            form == Formulation::FBar,
+            nodes(x0),
+            nodes(u),
+            mat,
+            state_old,
+        ),
+        ElemKind::Tet4 => stress_kernel(&TET4, false, nodes(x0), nodes(u), mat, state_old),
     }
 }
 
@@ -314,43 +363,94 @@ fn add_tangent<const N: usize>(
 
 /// Kinematics at one point.
 struct PointKinematics<const N: usize> {
-    /// The F handed to the material.
+    /// The F handed to the material (F̄ under F-bar).
     f: Matrix3<f64>,
     /// Gradients the B matrix uses: ∇_x N (finite) or ∇_X N (small).
     grad: [[f64; 3]; N],
-    /// Whether the geometric (initial-stress) term applies.
-    geometric: bool,
+    /// Reference volume weight w det J₀.
+    w: f64,
 }
 
-#[inline]
-fn point_kinematics<const N: usize>(
+/// The kinematics of every point of one element, with F replaced by F̄ under F-bar.
+/// Returns the points and, under F-bar, the volume-averaged gradients ḡ_a
+/// (1/v ∫ ∇_x N_a dv, finite; 1/V ∫ ∇_X N_a dV, small) that the tangent's extra term
+/// needs.
+#[inline(always)]
+#[allow(clippy::type_complexity)]
+fn element_kinematics<const N: usize, const G: usize>(
+    tab: &Tabulated<3, N, G>,
+    fbar: bool,
     kin: Kinematics,
+    x0: &[[f64; 3]; N],
     u: &[[f64; 3]; N],
-    grad0: &[[f64; 3]; N],
-    g: usize,
-) -> Result<PointKinematics<N>, ElementError> {
-    let f = deformation_gradient(u, grad0);
-    match kin {
-        Kinematics::Small => Ok(PointKinematics {
-            f,
-            grad: *grad0,
-            geometric: false,
-        }),
-        Kinematics::Finite => {
-            let j = f.determinant();
-            if j.is_nan() || j <= 0.0 {
-                return Err(ElementError(format!(
-                    "det F = {j:.3e} ≤ 0 at Gauss point {g} (element inverted)"
-                )));
+) -> Result<([PointKinematics<N>; G], Option<[[f64; 3]; N]>), ElementError> {
+    let mut pts: [PointKinematics<N>; G] = std::array::from_fn(|_| PointKinematics {
+        f: Matrix3::identity(),
+        grad: [[0.0; 3]; N],
+        w: 0.0,
+    });
+    // Volume measure per point: J (finite) or tr ε (small).
+    let mut vol = [0.0; G];
+    for (g, p) in pts.iter_mut().enumerate() {
+        let (grad0, det0) = reference_point(x0, &tab.dn[g], g)?;
+        p.w = tab.weights[g] * det0;
+        p.f = deformation_gradient(u, &grad0);
+        match kin {
+            Kinematics::Small => {
+                p.grad = grad0;
+                vol[g] = p.f.trace() - 3.0;
             }
-            let grad = transform_gradients(&(cofactor(&f) / j), grad0);
-            Ok(PointKinematics {
-                f,
-                grad,
-                geometric: true,
-            })
+            Kinematics::Finite => {
+                let j = p.f.determinant();
+                if j.is_nan() || j <= 0.0 {
+                    return Err(ElementError(format!(
+                        "det F = {j:.3e} ≤ 0 at Gauss point {g} (element inverted)"
+                    )));
+                }
+                p.grad = transform_gradients(&(cofactor(&p.f) / j), &grad0);
+                vol[g] = j;
+            }
         }
     }
+    if !fbar {
+        return Ok((pts, None));
+    }
+    // ḡ weights: J w (finite: current volume), w (small: reference volume).
+    let mut gbar = [[0.0; 3]; N];
+    let (mut v, mut big_v, mut theta) = (0.0, 0.0, 0.0);
+    for (p, &m) in pts.iter().zip(&vol) {
+        let wt = match kin {
+            Kinematics::Finite => m * p.w,
+            Kinematics::Small => p.w,
+        };
+        v += wt;
+        big_v += p.w;
+        theta += m * p.w;
+        for (gb, ga) in gbar.iter_mut().zip(&p.grad) {
+            for c in 0..3 {
+                gb[c] += wt * ga[c];
+            }
+        }
+    }
+    for gb in &mut gbar {
+        for c in gb.iter_mut() {
+            *c /= v;
+        }
+    }
+    for (p, &m) in pts.iter_mut().zip(&vol) {
+        match kin {
+            // J̄ = v / V; F̄ = (J̄/J)^{1/3} F.
+            Kinematics::Finite => p.f *= (v / big_v / m).cbrt(),
+            // ε̄ = ε + (θ̄ − tr ε)/3 I.
+            Kinematics::Small => {
+                let d = (theta / big_v - m) / 3.0;
+                for c in 0..3 {
+                    p.f[(c, c)] += d;
+                }
+            }
+        }
+    }
+    Ok((pts, Some(gbar)))
 }
 
 #[inline]
@@ -371,6 +471,7 @@ fn reference_point<const N: usize>(
 #[allow(clippy::too_many_arguments)]
 fn force_kernel<const N: usize, const G: usize>(
     tab: &Tabulated<3, N, G>,
+    fbar: bool,
     x0: &[[f64; 3]; N],
     u: &[[f64; 3]; N],
     mat: &dyn Material,
@@ -389,11 +490,62 @@ fn force_kernel<const N: usize, const G: usize>(
         Some(k) => {
             assert_eq!(k.len(), 9 * N * N, "tangent slice length");
             let mut kloc = [[[[0.0; 3]; N]; 3]; N];
-            gauss_loop(tab, x0, u, mat, state_old, state_new, f, Some(&mut kloc))?;
+            gauss_loop(
+                tab,
+                fbar,
+                x0,
+                u,
+                mat,
+                state_old,
+                state_new,
+                f,
+                Some(&mut kloc),
+            )?;
             k.copy_from_slice(kloc.as_flattened().as_flattened().as_flattened());
             Ok(())
         }
-        None => gauss_loop(tab, x0, u, mat, state_old, state_new, f, None),
+        None => gauss_loop(tab, fbar, x0, u, mat, state_old, state_new, f, None),
+    }
+}
+
+/// The F-bar tangent's extra term (de Souza Neto et al. eq. 15.20, written for τ over
+/// the reference volume): K_ab += w/3 (M g_a) ⊗ (ḡ_b − g_b), with M = c:I + 2τ̄
+/// (finite: linearizing τ̄ = τ(F̄) along δF̄ F̄⁻¹ = δl + δθ I gives c:I δθ and the
+/// Lie-derivative terms 2τ̄ δθ) or M = C:I (small strain).
+#[inline]
+fn add_fbar_tangent<const N: usize>(
+    g: &[[f64; 3]; N],
+    gbar: &[[f64; 3]; N],
+    sp: &StressPoint,
+    finite: bool,
+    w: f64,
+    k: &mut LocalTangent<N>,
+) {
+    let c = &sp.tangent;
+    let ci: [f64; 6] = std::array::from_fn(|r| c[r][0] + c[r][1] + c[r][2]);
+    let s2 = if finite { 2.0 } else { 0.0 };
+    let m: [f64; 6] = std::array::from_fn(|r| ci[r] + s2 * sp.stress[r]);
+    let d: [[f64; 3]; N] = std::array::from_fn(|b| {
+        [
+            (gbar[b][0] - g[b][0]) * w / 3.0,
+            (gbar[b][1] - g[b][1]) * w / 3.0,
+            (gbar[b][2] - g[b][2]) * w / 3.0,
+        ]
+    });
+    for a in 0..N {
+        let [g0, g1, g2] = g[a];
+        let mg = [
+            m[0] * g0 + m[3] * g1 + m[5] * g2,
+            m[3] * g0 + m[1] * g1 + m[4] * g2,
+            m[5] * g0 + m[4] * g1 + m[2] * g2,
+        ];
+        for i in 0..3 {
+            for b in 0..N {
+                for j in 0..3 {
+                    k[a][i][b][j] += mg[i] * d[b][j];
+                }
+            }
+        }
     }
 }
 
@@ -402,6 +554,7 @@ fn force_kernel<const N: usize, const G: usize>(
 #[inline(always)]
 fn gauss_loop<const N: usize, const G: usize>(
     tab: &Tabulated<3, N, G>,
+    fbar: bool,
     x0: &[[f64; 3]; N],
     u: &[[f64; 3]; N],
     mat: &dyn Material,
@@ -412,25 +565,23 @@ fn gauss_loop<const N: usize, const G: usize>(
 ) -> Result<(), ElementError> {
     let ns = mat.n_state();
     let kin = mat.kinematics();
+    let finite = kin == Kinematics::Finite;
+    let (pts, gbar) = element_kinematics(tab, fbar, kin, x0, u)?;
     f.fill(0.0);
-    for g in 0..G {
-        let (grad0, det0) = reference_point(x0, &tab.dn[g], g)?;
-        let w = tab.weights[g] * det0;
-        let PointKinematics {
-            f: fdef,
-            grad,
-            geometric,
-        } = point_kinematics(kin, u, &grad0, g)?;
+    for (g, p) in pts.iter().enumerate() {
         let sp = mat
             .evaluate(
-                &fdef,
+                &p.f,
                 &state_old[g * ns..(g + 1) * ns],
                 &mut state_new[g * ns..(g + 1) * ns],
             )
             .map_err(|e| ElementError(format!("material at Gauss point {g}: {}", e.0)))?;
-        add_force(&grad, &sp.stress, w, f);
+        add_force(&p.grad, &sp.stress, p.w, f);
         if let Some(k) = k.as_deref_mut() {
-            add_tangent(&grad, &sp, geometric, w, k);
+            add_tangent(&p.grad, &sp, finite, p.w, k);
+            if let Some(gb) = &gbar {
+                add_fbar_tangent(&p.grad, gb, &sp, finite, p.w, k);
+            }
         }
     }
     Ok(())
@@ -438,6 +589,7 @@ fn gauss_loop<const N: usize, const G: usize>(
 
 fn stress_kernel<const N: usize, const G: usize>(
     tab: &Tabulated<3, N, G>,
+    fbar: bool,
     x0: &[[f64; 3]; N],
     u: &[[f64; 3]; N],
     mat: &dyn Material,
@@ -460,23 +612,23 @@ fn stress_kernel<const N: usize, const G: usize>(
         &mut heap
     };
     let kin = mat.kinematics();
+    let (pts, _) = element_kinematics(tab, fbar, kin, x0, u)?;
     let (mut sum, mut vol) = ([0.0; 6], 0.0);
-    for g in 0..G {
-        let (grad0, det0) = reference_point(x0, &tab.dn[g], g)?;
-        let w = tab.weights[g] * det0;
-        let fdef = point_kinematics(kin, u, &grad0, g)?.f;
+    for (g, p) in pts.iter().enumerate() {
         let sp = mat
-            .evaluate(&fdef, &state_old[g * ns..(g + 1) * ns], scratch)
+            .evaluate(&p.f, &state_old[g * ns..(g + 1) * ns], scratch)
             .map_err(|e| ElementError(format!("material at Gauss point {g}: {}", e.0)))?;
         for (s, t) in sum.iter_mut().zip(&sp.stress) {
-            *s += w * t;
+            *s += p.w * t;
         }
-        // Kirchhoff τ integrated over dV, divided by v = ∫ J dV, is the mean of σ over dv.
-        vol += w * if kin == Kinematics::Finite {
-            fdef.determinant()
-        } else {
-            1.0
-        };
+        // Kirchhoff τ integrated over dV, divided by v = ∫ J dV, is the mean of σ over dv
+        // (under F-bar J̄ is constant and ∫ J̄ dV = v as well).
+        vol += p.w
+            * if kin == Kinematics::Finite {
+                p.f.determinant()
+            } else {
+                1.0
+            };
     }
     Ok(sum.map(|s| s / vol))
 }
@@ -548,11 +700,22 @@ mod tests {
         mat: &dyn Material,
         with_k: bool,
     ) -> (Vec<f64>, Vec<f64>) {
+        force_with(kind, Formulation::Standard, x0, u, mat, with_k)
+    }
+
+    fn force_with(
+        kind: ElemKind,
+        form: Formulation,
+        x0: &[[f64; 3]],
+        u: &[[f64; 3]],
+        mat: &dyn Material,
+        with_k: bool,
+    ) -> (Vec<f64>, Vec<f64>) {
         let n = 3 * kind.n_nodes();
         let mut f = vec![0.0; n];
         let mut k = vec![0.0; n * n];
         let kk = if with_k { Some(&mut k[..]) } else { None };
-        element_force(kind, x0, u, mat, &[], &mut [], &mut f, kk).unwrap();
+        element_force(kind, form, x0, u, mat, &[], &mut [], &mut f, kk).unwrap();
         (f, k)
     }
 
@@ -600,28 +763,139 @@ mod tests {
     fn tangent_matches_central_difference() {
         for (kind, x0) in cases() {
             for mat in mats() {
-                let u = deform(&x0, &some_f(), 0.04);
-                let (_, k) = force(kind, &x0, &u, mat.as_ref(), true);
-                let n = 3 * kind.n_nodes();
-                let kmax = k.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-                let h = 1e-6 * char_length(kind, &x0);
-                for col in 0..n {
-                    let (mut up, mut um) = (u.clone(), u.clone());
-                    up[col / 3][col % 3] += h;
-                    um[col / 3][col % 3] -= h;
-                    let (fp, _) = force(kind, &x0, &up, mat.as_ref(), false);
-                    let (fm, _) = force(kind, &x0, &um, mat.as_ref(), false);
-                    for row in 0..n {
-                        let fd = (fp[row] - fm[row]) / (2.0 * h);
-                        let an = k[row * n + col];
-                        assert!(
-                            (fd - an).abs() < 1e-6 * kmax,
-                            "{kind:?} {mat:?} K[{row},{col}] = {an}, fd {fd}"
-                        );
-                    }
+                for form in [Formulation::Standard, Formulation::FBar] {
+                    check_tangent(kind, form, &x0, &deform(&x0, &some_f(), 0.04), mat.as_ref());
                 }
             }
         }
+    }
+
+    /// The element tangent equals a central difference of the element force.
+    fn check_tangent(
+        kind: ElemKind,
+        form: Formulation,
+        x0: &[[f64; 3]],
+        u: &[[f64; 3]],
+        mat: &dyn Material,
+    ) {
+        let (_, k) = force_with(kind, form, x0, u, mat, true);
+        let n = 3 * kind.n_nodes();
+        let kmax = k.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        let h = 1e-6 * char_length(kind, x0);
+        for col in 0..n {
+            let (mut up, mut um) = (u.to_vec(), u.to_vec());
+            up[col / 3][col % 3] += h;
+            um[col / 3][col % 3] -= h;
+            let (fp, _) = force_with(kind, form, x0, &up, mat, false);
+            let (fm, _) = force_with(kind, form, x0, &um, mat, false);
+            for row in 0..n {
+                let fd = (fp[row] - fm[row]) / (2.0 * h);
+                let an = k[row * n + col];
+                assert!(
+                    (fd - an).abs() < 1e-6 * kmax,
+                    "{kind:?} {form:?} {mat:?} K[{row},{col}] = {an}, fd {fd}"
+                );
+            }
+        }
+    }
+
+    /// F-bar changes nothing where J is uniform (homogeneous F, rigid motion) and
+    /// something where it is not.
+    #[test]
+    fn fbar_agrees_with_standard_for_homogeneous_deformation() {
+        let x0 = hex();
+        let r = Rotation3::from_axis_angle(&Vector3::z_axis(), 0.7).into_inner();
+        for mat in mats() {
+            for fdef in [some_f(), r] {
+                let u = deform(&x0, &fdef, 0.0);
+                let (fs, _) = force(ElemKind::Hex8, &x0, &u, mat.as_ref(), false);
+                let (fb, _) = force_with(
+                    ElemKind::Hex8,
+                    Formulation::FBar,
+                    &x0,
+                    &u,
+                    mat.as_ref(),
+                    false,
+                );
+                let scale = fs.iter().fold(1.0f64, |m, v| m.max(v.abs()));
+                for (a, b) in fs.iter().zip(&fb) {
+                    assert!((a - b).abs() < 1e-12 * scale, "{mat:?}: {a} vs {b}");
+                }
+                let ss = element_stress(
+                    ElemKind::Hex8,
+                    Formulation::Standard,
+                    &x0,
+                    &u,
+                    mat.as_ref(),
+                    &[],
+                )
+                .unwrap();
+                let sb = element_stress(
+                    ElemKind::Hex8,
+                    Formulation::FBar,
+                    &x0,
+                    &u,
+                    mat.as_ref(),
+                    &[],
+                )
+                .unwrap();
+                for (a, b) in ss.iter().zip(&sb) {
+                    assert!((a - b).abs() < 1e-12 * scale.max(1.0), "{ss:?} vs {sb:?}");
+                }
+            }
+            let u = deform(&x0, &some_f(), 0.04);
+            let (fs, _) = force(ElemKind::Hex8, &x0, &u, mat.as_ref(), false);
+            let (fb, _) = force_with(
+                ElemKind::Hex8,
+                Formulation::FBar,
+                &x0,
+                &u,
+                mat.as_ref(),
+                false,
+            );
+            let diff = fs
+                .iter()
+                .zip(&fb)
+                .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+            assert!(
+                diff > 1e-4,
+                "{mat:?}: F-bar should differ for a non-uniform J"
+            );
+        }
+    }
+
+    /// A nearly incompressible block under a bending-like field: the standard hex8's
+    /// volumetric stiffness dominates, F-bar's does not (it only sees the mean J).
+    #[test]
+    fn fbar_relieves_volumetric_locking_in_bending() {
+        let x0: Vec<[f64; 3]> = HEX8_NODES
+            .iter()
+            .map(|p| [0.5 * (p[0] + 1.0), 0.5 * (p[1] + 1.0), 0.5 * (p[2] + 1.0)])
+            .collect();
+        // Pure bending mode u_x = κ x z (trapezoid in x–z): isochoric on average but not
+        // pointwise. Its energy with a large bulk modulus shows locking.
+        let u: Vec<[f64; 3]> = x0
+            .iter()
+            .map(|x| [1e-3 * (x[2] - 0.5) * (2.0 * x[0] - 1.0), 0.0, 0.0])
+            .collect();
+        let energy = |form, nu| {
+            let mat = LinearElastic::new(1.0, nu, 1.0);
+            let (f, _) = force_with(ElemKind::Hex8, form, &x0, &u, &mat, false);
+            f.iter()
+                .zip(u.iter().flatten())
+                .map(|(a, b)| a * b)
+                .sum::<f64>()
+        };
+        let (s0, s1) = (
+            energy(Formulation::Standard, 0.3),
+            energy(Formulation::Standard, 0.4999),
+        );
+        let (b0, b1) = (
+            energy(Formulation::FBar, 0.3),
+            energy(Formulation::FBar, 0.4999),
+        );
+        assert!(s1 / s0 > 100.0, "standard hex8 should lock: {s0} → {s1}");
+        assert!(b1 / b0 < 2.0, "F-bar should not lock: {b0} → {b1}");
     }
 
     #[test]
@@ -675,7 +949,8 @@ mod tests {
                     p * vol
                 );
                 assert!(sum.iter().all(|v| v.abs() < 1e-12 * p.norm()));
-                let st = element_stress(kind, &x0, &u, mat.as_ref(), &[]).unwrap();
+                let st = element_stress(kind, Formulation::Standard, &x0, &u, mat.as_ref(), &[])
+                    .unwrap();
                 let want = [
                     sigma[(0, 0)],
                     sigma[(1, 1)],
@@ -698,10 +973,20 @@ mod tests {
         let u = deform(&x0, &flip, 0.0);
         let mut f = vec![0.0; 24];
         let mat = NeoHookean::new(10.0, 0.3, 1.0);
-        let e =
-            element_force(ElemKind::Hex8, &x0, &u, &mat, &[], &mut [], &mut f, None).unwrap_err();
+        let e = element_force(
+            ElemKind::Hex8,
+            Formulation::Standard,
+            &x0,
+            &u,
+            &mat,
+            &[],
+            &mut [],
+            &mut f,
+            None,
+        )
+        .unwrap_err();
         assert!(e.0.contains("det F"), "{e:?}");
-        assert!(element_stress(ElemKind::Hex8, &x0, &u, &mat, &[]).is_err());
+        assert!(element_stress(ElemKind::Hex8, Formulation::Standard, &x0, &u, &mat, &[]).is_err());
     }
 
     #[test]
@@ -818,6 +1103,7 @@ mod tests {
         let mut f = vec![0.0; 24];
         element_force(
             ElemKind::Hex8,
+            Formulation::FBar,
             &hex(),
             &[[0.0; 3]; 8],
             &Probe,

@@ -1,6 +1,7 @@
 //! The serial model definition: what a validated deck resolves to on rank 0 before
 //! partitioning (whole mesh, resolved sets, materials, constraints, loads, settings).
 
+use crate::fem::element::Formulation;
 use crate::material::{LinearElastic, Material, NeoHookean};
 use crate::mesh::{FaceRef, Mesh};
 use crate::scene::deck::{AnalysisDeck, OutputDeck, SolverDeck, Units};
@@ -139,6 +140,8 @@ pub struct ModelDef {
     pub part_names: Vec<String>,
     /// Material index of each part.
     pub part_material: Vec<usize>,
+    /// Hex8 volume treatment of each part (resolved from `auto`).
+    pub part_formulation: Vec<Formulation>,
     pub materials: Vec<(String, MaterialDef)>,
     pub node_sets: BTreeMap<String, Vec<usize>>,
     pub surfaces: BTreeMap<String, Vec<FaceRef>>,
@@ -146,6 +149,8 @@ pub struct ModelDef {
     pub loads: Vec<Load>,
     /// Node sets whose reaction forces are reported, in column order.
     pub reaction_sets: Vec<String>,
+    /// Node sets whose mean displacement is reported, in column order.
+    pub displacement_sets: Vec<String>,
     pub settings: Settings,
 }
 
@@ -153,6 +158,9 @@ impl ModelDef {
     /// Material index of each element.
     pub fn elem_material(&self, e: usize) -> usize {
         self.part_material[self.mesh.elem_part[e] as usize]
+    }
+    pub fn elem_formulation(&self, e: usize) -> Formulation {
+        self.part_formulation[self.mesh.elem_part[e] as usize]
     }
 }
 

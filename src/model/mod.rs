@@ -38,6 +38,8 @@ pub struct Model {
     state_new: Vec<f64>,
     /// Owned nodes of each reaction set.
     reaction_nodes: Vec<Vec<usize>>,
+    /// Owned nodes of each displacement set, and the set's global size.
+    displacement_nodes: Vec<(Vec<usize>, usize)>,
     /// Work vector over local dofs (owned + ghost).
     work: Vec<f64>,
     /// Total element evaluations (for rates).
@@ -114,6 +116,20 @@ impl Model {
                     .unwrap_or_default()
             })
             .collect();
+        let displacement_nodes = local
+            .displacement_sets
+            .iter()
+            .map(|s| {
+                let owned: Vec<usize> = local
+                    .node_sets
+                    .get(s)
+                    .map(|v| v.iter().copied().filter(|&n| n < local.n_owned()).collect())
+                    .unwrap_or_default();
+                let mut count = [owned.len() as f64];
+                comm.allreduce_sum(&mut count);
+                (owned, count[0] as usize)
+            })
+            .collect();
         let n_local_dofs = 3 * local.n_local_nodes();
         Ok(Self {
             materials,
@@ -127,6 +143,7 @@ impl Model {
             state_new: vec![0.0; s],
             state_offset,
             reaction_nodes,
+            displacement_nodes,
             work: vec![0.0; n_local_dofs],
             element_evaluations: 0,
             local,
@@ -235,6 +252,7 @@ impl Model {
             let (s0, s1) = (self.state_offset[e], self.state_offset[e + 1]);
             let res = element_force(
                 self.local.kinds[e],
+                self.local.elem_formulation[e],
                 &x0[..n],
                 &ue[..n],
                 mat,
@@ -444,6 +462,26 @@ impl Model {
         sums.chunks(3).map(|c| [c[0], c[1], c[2]]).collect()
     }
 
+    /// Mean displacement of each displacement set (collective).
+    pub fn mean_displacements(&self, comm: &dyn Comm, u_owned: &[f64]) -> Vec<[f64; 3]> {
+        let mut sums = vec![0.0; 3 * self.displacement_nodes.len()];
+        for (s, (nodes, _)) in self.displacement_nodes.iter().enumerate() {
+            for &n in nodes {
+                for c in 0..3 {
+                    sums[3 * s + c] += u_owned[3 * n + c];
+                }
+            }
+        }
+        comm.allreduce_sum(&mut sums);
+        sums.chunks(3)
+            .zip(&self.displacement_nodes)
+            .map(|(c, (_, count))| {
+                let k = (*count).max(1) as f64;
+                [c[0] / k, c[1] / k, c[2] / k]
+            })
+            .collect()
+    }
+
     /// Volume-averaged Cauchy stress of every local element.
     pub fn stresses(&self, comm: &dyn Comm, u_owned: &[f64]) -> Result<Vec<[f64; 6]>> {
         let mut u_local = Vec::new();
@@ -457,6 +495,7 @@ impl Model {
             let (s0, s1) = (self.state_offset[e], self.state_offset[e + 1]);
             let s = element_stress(
                 self.local.kinds[e],
+                self.local.elem_formulation[e],
                 &x0[..n],
                 &ue[..n],
                 mat,

@@ -149,6 +149,9 @@ impl ResultsWriter {
                 for s in &l.reaction_sets {
                     head.push_str(&format!(",{s}.fx,{s}.fy,{s}.fz"));
                 }
+                for s in &l.displacement_sets {
+                    head.push_str(&format!(",{s}.ux,{s}.uy,{s}.uz"));
+                }
                 head.push_str(",residual_evaluations,factorizations,final_relative_residual,assembly_s,linear_s");
                 writeln!(f, "{head}")?;
                 history = Some(f);
@@ -187,6 +190,7 @@ impl ResultsWriter {
         fields: bool,
     ) -> Result<()> {
         let t0 = std::time::Instant::now();
+        let mean_u = model.mean_displacements(comm, u);
         let r = if let Some(f) = self.history.as_mut() {
             let s = &rec.stats;
             let mut row = format!(
@@ -198,7 +202,7 @@ impl ResultsWriter {
                 rec.retries,
                 rec.wall_seconds
             );
-            for f3 in &rec.reactions {
+            for f3 in rec.reactions.iter().chain(&mean_u) {
                 row.push_str(&format!(",{:.12e},{:.12e},{:.12e}", f3[0], f3[1], f3[2]));
             }
             row.push_str(&format!(

@@ -30,6 +30,8 @@ pub struct LocalModel {
     /// Element connectivity in local node indices.
     pub conn: Vec<usize>,
     pub elem_material: Vec<u32>,
+    /// Hex8 volume treatment of each local element.
+    pub elem_formulation: Vec<crate::fem::element::Formulation>,
     /// Element number in the user's mesh, for each local element.
     pub orig_elem: Vec<u64>,
     /// Named node sets restricted to local nodes (owned and ghost), local indices.
@@ -40,6 +42,7 @@ pub struct LocalModel {
     pub constraints: Vec<Constraint>,
     pub loads: Vec<Load>,
     pub reaction_sets: Vec<String>,
+    pub displacement_sets: Vec<String>,
     pub settings: Settings,
     pub n_nodes_global: usize,
     pub n_elems_global: usize,
@@ -135,12 +138,14 @@ pub fn split(def: &ModelDef, part: &[u32], ranks: usize) -> Vec<LocalModel> {
         let mut offsets = vec![0usize];
         let mut conn = Vec::new();
         let mut elem_material = Vec::new();
+        let mut elem_formulation = Vec::new();
         let mut local_elem = BTreeMap::new();
         for (le, &e) in elems_of[r].iter().enumerate() {
             kinds.push(mesh.kinds[e]);
             conn.extend(mesh.elem_nodes(e).iter().map(|&n| local_of[n]));
             offsets.push(conn.len());
             elem_material.push(def.elem_material(e) as u32);
+            elem_formulation.push(def.elem_formulation(e));
             local_elem.insert(e, le);
         }
         let node_sets = def
@@ -180,6 +185,7 @@ pub fn split(def: &ModelDef, part: &[u32], ranks: usize) -> Vec<LocalModel> {
             offsets,
             conn,
             elem_material,
+            elem_formulation,
             orig_elem: elems_of[r].iter().map(|&e| e as u64).collect(),
             node_sets,
             surfaces,
@@ -187,6 +193,7 @@ pub fn split(def: &ModelDef, part: &[u32], ranks: usize) -> Vec<LocalModel> {
             constraints: def.constraints.clone(),
             loads: def.loads.clone(),
             reaction_sets: def.reaction_sets.clone(),
+            displacement_sets: def.displacement_sets.clone(),
             settings: def.settings.clone(),
             n_nodes_global: mesh.n_nodes(),
             n_elems_global: mesh.n_elems(),

@@ -3,7 +3,7 @@
 //! deck field and what was expected.
 
 use super::deck::*;
-use crate::fem::element::check_reference;
+use crate::fem::element::{check_reference, Formulation};
 use crate::mesh::generate::{box_mesh, distort_interior, BoxSpec};
 use crate::mesh::select::{bounding_box, faces_in_box, nodes_in_box, nodes_of_faces};
 use crate::mesh::{gmsh, ElemKind, FaceRef, Mesh};
@@ -65,10 +65,10 @@ pub fn build(deck: &Deck, deck_dir: &Path) -> Result<ModelDef> {
     let mut materials = Vec::new();
     for (i, m) in deck.materials.iter().enumerate() {
         let f = format!("materials[{i}]");
-        if !(m.e > 0.0 && m.e.is_finite()) {
+        if !(m.e.is_some_and(|e| e > 0.0 && e.is_finite())) {
             return Err(err(
                 format!("{f}.E"),
-                format!("expected a positive modulus, got {}", m.e),
+                format!("expected a positive modulus, got {:?}", m.e),
             ));
         }
         if !(m.nu > -1.0 && m.nu < 0.5) {
@@ -85,15 +85,16 @@ pub fn build(deck: &Deck, deck_dir: &Path) -> Result<ModelDef> {
         }
         let def = match m.model {
             MaterialModel::LinearElastic => MaterialDef::LinearElastic {
-                e: m.e,
+                e: m.e.unwrap_or(0.0),
                 nu: m.nu,
                 density: m.density,
             },
             MaterialModel::NeoHookean => MaterialDef::NeoHookean {
-                e: m.e,
+                e: m.e.unwrap_or(0.0),
                 nu: m.nu,
                 density: m.density,
             },
+            _ => todo!(),
         };
         materials.push((m.name.clone(), def));
     }
@@ -104,6 +105,7 @@ pub fn build(deck: &Deck, deck_dir: &Path) -> Result<ModelDef> {
     }
     let mut mesh = Mesh::default();
     let mut part_material = Vec::new();
+    let mut part_formulation = Vec::new();
     let mut part_nodes: Vec<BTreeSet<usize>> = Vec::new();
     for (pi, p) in deck.parts.iter().enumerate() {
         let f = format!("parts[{pi}]");
@@ -123,6 +125,10 @@ pub fn build(deck: &Deck, deck_dir: &Path) -> Result<ModelDef> {
             ));
         };
         part_material.push(mi);
+        part_formulation.push(match p.formulation {
+            FormulationDeck::Fbar => Formulation::FBar,
+            _ => Formulation::Standard,
+        });
         let pm = part_mesh(&p.mesh, &f, pi as u32, deck_dir)?;
         // Reference-configuration validity of every element.
         for e in 0..pm.n_elems() {
@@ -533,16 +539,23 @@ pub fn build(deck: &Deck, deck_dir: &Path) -> Result<ModelDef> {
         }
     };
 
+    for (i, n) in deck.output.displacements.iter().enumerate() {
+        let nodes = set_nodes(format!("output.displacements[{i}]"), n)?;
+        resolved_sets.insert(n.clone(), nodes);
+    }
+
     Ok(ModelDef {
         mesh,
         part_names: deck.parts.iter().map(|p| p.name.clone()).collect(),
         part_material,
+        part_formulation,
         materials,
         node_sets: resolved_sets,
         surfaces,
         constraints,
         loads,
         reaction_sets,
+        displacement_sets: deck.output.displacements.clone(),
         settings: Settings {
             scene: deck.scene.name.clone(),
             units: deck.scene.units,
@@ -601,6 +614,57 @@ fn part_mesh(m: &MeshDeck, f: &str, part: u32, deck_dir: &Path) -> Result<Mesh> 
             let mut mesh = box_mesh(&spec, part);
             if *distort > 0.0 {
                 distort_interior(&mut mesh, *distort, 12345);
+            }
+            Ok(mesh)
+        }
+        MeshDeck::ExtrudedQuad {
+            corners,
+            z0,
+            thickness,
+            cells,
+            element,
+        } => {
+            if !(*thickness > 0.0 && thickness.is_finite()) {
+                return Err(err(
+                    format!("{f}.mesh.thickness"),
+                    format!("expected a positive length, got {thickness}"),
+                ));
+            }
+            if cells.contains(&0) {
+                return Err(err(
+                    format!("{f}.mesh.cells"),
+                    format!("expected three counts ≥ 1, got {cells:?}"),
+                ));
+            }
+            // Convex and counter-clockwise: every corner turns left.
+            for i in 0..4 {
+                let (a, b, c) = (corners[i], corners[(i + 1) % 4], corners[(i + 2) % 4]);
+                let cross = (b[0] - a[0]) * (c[1] - b[1]) - (b[1] - a[1]) * (c[0] - b[0]);
+                if !(cross > 0.0) {
+                    return Err(err(
+                        format!("{f}.mesh.corners"),
+                        "expected a convex quadrilateral, corners counter-clockwise",
+                    ));
+                }
+            }
+            let kind = match element {
+                ElementDeck::Hex8 => ElemKind::Hex8,
+                ElementDeck::Tet4 => ElemKind::Tet4,
+            };
+            let spec = BoxSpec {
+                origin: [0.0, 0.0, *z0],
+                size: [1.0, 1.0, *thickness],
+                cells: *cells,
+                grading: [1.0; 3],
+                kind,
+            };
+            let mut mesh = box_mesh(&spec, part);
+            // Bilinear map: corners 0..3 at (ξ, η) = (0,0), (1,0), (1,1), (0,1).
+            for x in &mut mesh.coords {
+                let (s, t) = (x[0], x[1]);
+                let w = [(1.0 - s) * (1.0 - t), s * (1.0 - t), s * t, (1.0 - s) * t];
+                x[0] = (0..4).map(|i| w[i] * corners[i][0]).sum();
+                x[1] = (0..4).map(|i| w[i] * corners[i][1]).sum();
             }
             Ok(mesh)
         }

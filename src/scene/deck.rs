@@ -69,25 +69,87 @@ impl Units {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum MaterialModel {
-    /// Small-strain isotropic Hooke's law.
+    /// Small-strain isotropic Hooke's law: `E`, `nu`.
     LinearElastic,
-    /// Compressible neo-Hookean (Bonet & Wood eq. 6.28), finite strain.
+    /// Compressible neo-Hookean (Bonet & Wood eq. 6.28), finite strain: `E`, `nu`.
     NeoHookean,
+    /// LS-DYNA's hyperelastic rubber: `C10`, `C01`, `nu`; G = 2(C10 + C01), K from G
+    /// and ν; W = C10(Ī₁−3) + C01(Ī₂−3) + K/2 (J−1)².
+    MooneyRivlin,
+    /// Finite-strain J2 plasticity (Hencky elasticity, exponential-map return):
+    /// `E`, `nu`, `yield_stress`, `hardening`.
+    J2,
 }
 
+impl MaterialModel {
+    pub fn name(self) -> &'static str {
+        match self {
+            MaterialModel::LinearElastic => "linear-elastic",
+            MaterialModel::NeoHookean => "neo-hookean",
+            MaterialModel::MooneyRivlin => "mooney-rivlin",
+            MaterialModel::J2 => "j2",
+        }
+    }
+}
+
+/// A material. Which fields apply depends on `model`; a field the model does not use
+/// is an error (so a typo in the model name cannot silently drop a parameter).
 #[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct MaterialDeck {
     pub name: String,
     pub model: MaterialModel,
-    /// Young's modulus (stress units).
-    #[serde(rename = "E")]
-    pub e: f64,
-    /// Poisson's ratio.
+    /// Young's modulus (stress units): linear-elastic, neo-hookean, j2.
+    #[serde(default, rename = "E")]
+    pub e: Option<f64>,
+    /// Poisson's ratio (all models).
     pub nu: f64,
+    /// Mooney–Rivlin constants (stress units).
+    #[serde(default, rename = "C10")]
+    pub c10: Option<f64>,
+    #[serde(default, rename = "C01")]
+    pub c01: Option<f64>,
+    /// Initial yield stress σ_y0 (j2).
+    #[serde(default)]
+    pub yield_stress: Option<f64>,
+    /// Isotropic hardening (j2; default perfectly plastic).
+    #[serde(default)]
+    pub hardening: Option<HardeningDeck>,
     /// Mass density (mass / length³); only dynamics needs it.
     #[serde(default)]
     pub density: f64,
+}
+
+/// Isotropic hardening of the yield stress with equivalent plastic strain ε̄p.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(tag = "type", rename_all = "lowercase", deny_unknown_fields)]
+pub enum HardeningDeck {
+    /// σ_y = σ_y0 + `modulus` · ε̄p.
+    Linear { modulus: f64 },
+    /// σ_y = σ_y0 + `k` · ε̄p^`n`.
+    Power { k: f64, n: f64 },
+    /// σ_y(ε̄p) piecewise linear through `points` = [[ε̄p, σ_y], ...] (first ε̄p = 0,
+    /// σ_y there equal to `yield_stress`), or through the named `[[curves]]` entry.
+    Table {
+        #[serde(default)]
+        points: Option<Vec<[f64; 2]>>,
+        #[serde(default)]
+        curve: Option<String>,
+    },
+}
+
+/// How a part's hex8 elements treat volume change.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize, Default)]
+#[serde(rename_all = "kebab-case")]
+pub enum FormulationDeck {
+    /// F-bar where the material is nearly incompressible (ν ≥ 0.45) or plastic
+    /// (isochoric flow), standard otherwise.
+    #[default]
+    Auto,
+    /// Full integration of F: locks for ν → 0.5 and in plastic flow.
+    Standard,
+    /// F-bar (mean-dilatation J̄; B-bar for small strain).
+    Fbar,
 }
 
 #[derive(Debug, Clone, Deserialize, Serialize)]
@@ -96,6 +158,9 @@ pub struct PartDeck {
     pub name: String,
     pub material: String,
     pub mesh: MeshDeck,
+    /// Volume treatment of hex8 elements (default auto).
+    #[serde(default)]
+    pub formulation: FormulationDeck,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize, Default)]
@@ -123,6 +188,21 @@ pub enum MeshDeck {
         /// Move interior nodes by up to this fraction of the local edge (patch tests).
         #[serde(default)]
         distort: f64,
+    },
+    /// A quadrilateral in the x–y plane extruded along z: the unit square mapped
+    /// bilinearly onto `corners` (counter-clockwise, the first at the `xmin`/`ymin`
+    /// corner), z from `z0` to `z0 + thickness`. The sides are groups `xmin`, `xmax`,
+    /// `ymin`, `ymax` (in the square's parameters: `xmin` is the edge from corner 0 to
+    /// corner 3), `zmin`, `zmax`.
+    #[serde(rename = "extruded-quad")]
+    ExtrudedQuad {
+        corners: [[f64; 2]; 4],
+        #[serde(default)]
+        z0: f64,
+        thickness: f64,
+        cells: [usize; 3],
+        #[serde(default)]
+        element: ElementDeck,
     },
     /// A Gmsh MSH 4.1 ASCII file (hex8, tet4; physical groups become groups). A
     /// relative path is taken from the deck's directory.
@@ -436,6 +516,9 @@ pub struct OutputDeck {
     /// Node sets whose reaction forces go to the history; default: every constrained set.
     #[serde(default)]
     pub reactions: Option<Vec<String>>,
+    /// Node sets whose mean displacement goes to the history (`<set>.ux, .uy, .uz`).
+    #[serde(default)]
+    pub displacements: Vec<String>,
 }
 
 fn one() -> usize {
@@ -447,6 +530,7 @@ impl Default for OutputDeck {
         Self {
             every: 1,
             reactions: None,
+            displacements: Vec::new(),
         }
     }
 }

@@ -34,6 +34,11 @@ pub const BUILTIN: &[(&str, &str, &str)] = &[
         "neo-Hookean cube stretched to twice its length between rollers (closed-form stress)",
         include_str!("scenes/cube-stretch.toml"),
     ),
+    (
+        "cook-membrane",
+        "Cook's membrane, 3D finite strain, nu = 0.4999: hex8 F-bar against the published band",
+        include_str!("scenes/cook-membrane.toml"),
+    ),
 ];
 
 /// The scene `alfe` and `alfe run` use when none is named.

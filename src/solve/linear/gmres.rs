@@ -68,7 +68,7 @@ const BREAKDOWN: f64 = 1e-14;
 /// Solves A x = b; `x` holds the initial guess on entry and the solution on exit.
 ///
 /// Collective. Returns `Ok` with `converged == false` when the iteration budget runs
-/// out or the iteration stagnates after a breakdown; `Err` when the operator fails (its
+/// out, a restart cycle gains less than 1 %, or the iteration stagnates after a breakdown; `Err` when the operator fails (its
 /// error is propagated) or the residual becomes non-finite.
 pub fn gmres(
     comm: &dyn Comm,
@@ -151,6 +151,12 @@ pub fn gmres(
             // After a breakdown the space was invariant: restarting only helps if the
             // cycle made real progress (otherwise A M⁻¹ is singular on it).
             if breakdown && beta > 0.5 * beta0 {
+                break;
+            }
+            // A whole cycle that gained less than 1 %: GMRES(m) has stagnated (or the
+            // residual sits at the attainable accuracy of an ill-conditioned system);
+            // more cycles would burn the budget for nothing.
+            if beta > 0.99 * beta0 {
                 break;
             }
         }
