@@ -8,10 +8,19 @@
 //!
 //! Voigt order everywhere: xx, yy, zz, xy, yz, xz (engineering shear strains in B).
 
+pub mod hardening;
+pub mod j2;
 pub mod linear_elastic;
+pub mod mooney_rivlin;
 pub mod neo_hookean;
+mod tensor;
+#[cfg(test)]
+mod testing;
 
+pub use hardening::Hardening;
+pub use j2::J2Plasticity;
 pub use linear_elastic::LinearElastic;
+pub use mooney_rivlin::MooneyRivlin;
 pub use neo_hookean::NeoHookean;
 
 use nalgebra::Matrix3;
@@ -58,6 +67,11 @@ pub trait Material: Send + Sync + std::fmt::Debug {
     fn bulk_modulus(&self) -> f64;
     /// Mass density (mass per volume in the deck's unit system).
     fn density(&self) -> f64;
+    /// Equivalent plastic strain stored in one point's history `state`, for models
+    /// that have one (None for elastic models).
+    fn equivalent_plastic_strain(&self, _state: &[f64]) -> Option<f64> {
+        None
+    }
 }
 
 /// Lamé constants from Young's modulus and Poisson's ratio.
