@@ -2,7 +2,7 @@
 //! partitioning (whole mesh, resolved sets, materials, constraints, loads, settings).
 
 use crate::fem::element::Formulation;
-use crate::material::{LinearElastic, Material, NeoHookean};
+use crate::material::{Hardening, J2Plasticity, LinearElastic, Material, MooneyRivlin, NeoHookean};
 use crate::mesh::{FaceRef, Mesh};
 use crate::scene::deck::{AnalysisDeck, OutputDeck, SolverDeck, Units};
 use serde::{Deserialize, Serialize};
@@ -10,18 +10,68 @@ use std::collections::BTreeMap;
 
 #[derive(Debug, Clone, Serialize, Deserialize)]
 pub enum MaterialDef {
-    LinearElastic { e: f64, nu: f64, density: f64 },
-    NeoHookean { e: f64, nu: f64, density: f64 },
+    LinearElastic {
+        e: f64,
+        nu: f64,
+        density: f64,
+    },
+    NeoHookean {
+        e: f64,
+        nu: f64,
+        density: f64,
+    },
+    MooneyRivlin {
+        c10: f64,
+        c01: f64,
+        nu: f64,
+        density: f64,
+    },
+    J2 {
+        e: f64,
+        nu: f64,
+        hardening: Hardening,
+        density: f64,
+    },
 }
 
 impl MaterialDef {
     pub fn build(&self) -> Box<dyn Material> {
-        match *self {
-            MaterialDef::LinearElastic { e, nu, density } => {
+        match self {
+            &MaterialDef::LinearElastic { e, nu, density } => {
                 Box::new(LinearElastic::new(e, nu, density))
             }
-            MaterialDef::NeoHookean { e, nu, density } => Box::new(NeoHookean::new(e, nu, density)),
+            &MaterialDef::NeoHookean { e, nu, density } => {
+                Box::new(NeoHookean::new(e, nu, density))
+            }
+            &MaterialDef::MooneyRivlin {
+                c10,
+                c01,
+                nu,
+                density,
+            } => Box::new(MooneyRivlin::new(c10, c01, nu, density)),
+            MaterialDef::J2 {
+                e,
+                nu,
+                hardening,
+                density,
+            } => Box::new(J2Plasticity::new(*e, *nu, hardening.clone(), *density)),
         }
+    }
+
+    /// Poisson's ratio (the small-strain one for every model).
+    pub fn nu(&self) -> f64 {
+        match *self {
+            MaterialDef::LinearElastic { nu, .. }
+            | MaterialDef::NeoHookean { nu, .. }
+            | MaterialDef::MooneyRivlin { nu, .. }
+            | MaterialDef::J2 { nu, .. } => nu,
+        }
+    }
+
+    /// Whether hex8 should use F-bar by default: nearly incompressible (ν ≥ 0.45) or
+    /// plastic (isochoric flow locks a fully integrated hex8 just the same).
+    pub fn wants_fbar(&self) -> bool {
+        self.nu() >= 0.45 || matches!(self, MaterialDef::J2 { .. })
     }
 }
 

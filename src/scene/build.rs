@@ -4,6 +4,7 @@
 
 use super::deck::*;
 use crate::fem::element::{check_reference, Formulation};
+use crate::material::Hardening;
 use crate::mesh::generate::{box_mesh, distort_interior, BoxSpec};
 use crate::mesh::select::{bounding_box, faces_in_box, nodes_in_box, nodes_of_faces};
 use crate::mesh::{gmsh, ElemKind, FaceRef, Mesh};
@@ -64,39 +65,7 @@ pub fn build(deck: &Deck, deck_dir: &Path) -> Result<ModelDef> {
     // Materials.
     let mut materials = Vec::new();
     for (i, m) in deck.materials.iter().enumerate() {
-        let f = format!("materials[{i}]");
-        if !(m.e.is_some_and(|e| e > 0.0 && e.is_finite())) {
-            return Err(err(
-                format!("{f}.E"),
-                format!("expected a positive modulus, got {:?}", m.e),
-            ));
-        }
-        if !(m.nu > -1.0 && m.nu < 0.5) {
-            return Err(err(
-                format!("{f}.nu"),
-                format!("expected -1 < nu < 0.5, got {}", m.nu),
-            ));
-        }
-        if !(m.density >= 0.0 && m.density.is_finite()) {
-            return Err(err(
-                format!("{f}.density"),
-                format!("expected ≥ 0, got {}", m.density),
-            ));
-        }
-        let def = match m.model {
-            MaterialModel::LinearElastic => MaterialDef::LinearElastic {
-                e: m.e.unwrap_or(0.0),
-                nu: m.nu,
-                density: m.density,
-            },
-            MaterialModel::NeoHookean => MaterialDef::NeoHookean {
-                e: m.e.unwrap_or(0.0),
-                nu: m.nu,
-                density: m.density,
-            },
-            _ => todo!(),
-        };
-        materials.push((m.name.clone(), def));
+        materials.push((m.name.clone(), material_def(m, &format!("materials[{i}]"), deck)?));
     }
 
     // Parts and their meshes.
@@ -126,8 +95,10 @@ pub fn build(deck: &Deck, deck_dir: &Path) -> Result<ModelDef> {
         };
         part_material.push(mi);
         part_formulation.push(match p.formulation {
+            FormulationDeck::Standard => Formulation::Standard,
             FormulationDeck::Fbar => Formulation::FBar,
-            _ => Formulation::Standard,
+            FormulationDeck::Auto if materials[mi].1.wants_fbar() => Formulation::FBar,
+            FormulationDeck::Auto => Formulation::Standard,
         });
         let pm = part_mesh(&p.mesh, &f, pi as u32, deck_dir)?;
         // Reference-configuration validity of every element.
@@ -727,4 +698,134 @@ fn compact_unused_nodes(mesh: &mut Mesh) {
             .map(|&n| map[n])
             .collect();
     }
+}
+
+/// A material deck entry → its definition, checking the fields its model needs and
+/// refusing the ones it does not use.
+fn material_def(m: &MaterialDeck, f: &str, deck: &Deck) -> Result<MaterialDef> {
+    let model = m.model.name();
+    let positive = |name: &str, v: Option<f64>| -> Result<f64> {
+        match v {
+            None => Err(err(
+                format!("{f}.{name}"),
+                format!("model `{model}` needs {name}"),
+            )),
+            Some(v) if v > 0.0 && v.is_finite() => Ok(v),
+            Some(v) => Err(err(
+                format!("{f}.{name}"),
+                format!("expected a positive value, got {v}"),
+            )),
+        }
+    };
+    let unused = |name: &str, given: bool| -> Result<()> {
+        if given {
+            Err(err(
+                format!("{f}.{name}"),
+                format!("is not a parameter of model `{model}`"),
+            ))
+        } else {
+            Ok(())
+        }
+    };
+    let nu = m.nu;
+    if !(nu > -1.0 && nu < 0.5) {
+        return Err(err(
+            format!("{f}.nu"),
+            format!("expected -1 < nu < 0.5, got {nu}"),
+        ));
+    }
+    if !(m.density >= 0.0 && m.density.is_finite()) {
+        return Err(err(
+            format!("{f}.density"),
+            format!("expected ≥ 0, got {}", m.density),
+        ));
+    }
+    let density = m.density;
+    let plastic_unused = || -> Result<()> {
+        unused("yield_stress", m.yield_stress.is_some())?;
+        unused("hardening", m.hardening.is_some())
+    };
+    Ok(match m.model {
+        MaterialModel::LinearElastic | MaterialModel::NeoHookean => {
+            let e = positive("E", m.e)?;
+            unused("C10", m.c10.is_some())?;
+            unused("C01", m.c01.is_some())?;
+            plastic_unused()?;
+            if m.model == MaterialModel::LinearElastic {
+                MaterialDef::LinearElastic { e, nu, density }
+            } else {
+                MaterialDef::NeoHookean { e, nu, density }
+            }
+        }
+        MaterialModel::MooneyRivlin => {
+            unused("E", m.e.is_some())?;
+            plastic_unused()?;
+            let c10 = m.c10.ok_or_else(|| err(format!("{f}.C10"), "model `mooney-rivlin` needs C10"))?;
+            let c01 = m.c01.unwrap_or(0.0);
+            if !(c10.is_finite() && c01.is_finite() && c10 + c01 > 0.0 && c10 >= 0.0 && c01 >= 0.0) {
+                return Err(err(
+                    format!("{f}.C10"),
+                    format!("expected C10 ≥ 0, C01 ≥ 0 and C10 + C01 > 0, got C10 = {c10}, C01 = {c01}"),
+                ));
+            }
+            MaterialDef::MooneyRivlin { c10, c01, nu, density }
+        }
+        MaterialModel::J2 => {
+            let e = positive("E", m.e)?;
+            unused("C10", m.c10.is_some())?;
+            unused("C01", m.c01.is_some())?;
+            let sigma_y0 = positive("yield_stress", m.yield_stress)?;
+            let hf = format!("{f}.hardening");
+            let hardening = match &m.hardening {
+                None => Hardening::Linear { sigma_y0, h: 0.0 },
+                Some(HardeningDeck::Linear { modulus }) => Hardening::Linear {
+                    sigma_y0,
+                    h: *modulus,
+                },
+                Some(HardeningDeck::Power { k, n }) => Hardening::Power {
+                    sigma_y0,
+                    k: *k,
+                    n: *n,
+                },
+                Some(HardeningDeck::Table { points, curve }) => {
+                    let pts = match (points, curve) {
+                        (Some(p), None) => p.clone(),
+                        (None, Some(name)) => deck
+                            .curves
+                            .iter()
+                            .find(|c| &c.name == name)
+                            .map(|c| c.points.clone())
+                            .ok_or_else(|| {
+                                err(format!("{hf}.curve"), format!("unknown curve `{name}`"))
+                            })?,
+                        _ => {
+                            return Err(err(
+                                &hf,
+                                "a table needs exactly one of `points` or `curve`",
+                            ))
+                        }
+                    };
+                    if let Some(first) = pts.first() {
+                        if (first[1] - sigma_y0).abs() > 1e-12 * sigma_y0 {
+                            return Err(err(
+                                &hf,
+                                format!(
+                                    "the table starts at σ_y = {} but yield_stress is {sigma_y0}",
+                                    first[1]
+                                ),
+                            ));
+                        }
+                    }
+                    Hardening::Tabulated { points: pts }
+                }
+            };
+            hardening.validate().map_err(|why| err(&hf, why))?;
+            MaterialDef::J2 {
+                e,
+                nu,
+                hardening,
+                density,
+            }
+        }
+    })
 }
