@@ -482,6 +482,34 @@ impl Model {
             .collect()
     }
 
+    /// Whether any material carries an equivalent plastic strain (same on all ranks:
+    /// every rank holds the whole material list).
+    pub fn has_plastic_strain(&self) -> bool {
+        self.materials
+            .iter()
+            .any(|m| m.equivalent_plastic_strain(&vec![0.0; m.n_state()]).is_some())
+    }
+
+    /// Equivalent plastic strain of every local element at the last committed state:
+    /// the mean over its integration points (0 for elastic materials).
+    pub fn plastic_strains(&self) -> Vec<f64> {
+        (0..self.local.n_elems())
+            .map(|e| {
+                let mat = self.materials[self.local.elem_material[e] as usize].as_ref();
+                let ns = mat.n_state();
+                let (s0, s1) = (self.state_offset[e], self.state_offset[e + 1]);
+                if ns == 0 || s1 == s0 {
+                    return 0.0;
+                }
+                let pts = self.state_old[s0..s1].chunks(ns);
+                let n = pts.len() as f64;
+                pts.map(|s| mat.equivalent_plastic_strain(s).unwrap_or(0.0))
+                    .sum::<f64>()
+                    / n
+            })
+            .collect()
+    }
+
     /// Volume-averaged Cauchy stress of every local element.
     pub fn stresses(&self, comm: &dyn Comm, u_owned: &[f64]) -> Result<Vec<[f64; 6]>> {
         let mut u_local = Vec::new();

@@ -248,6 +248,18 @@ impl ResultsWriter {
                 self.elem_start,
                 &vm,
             )?;
+            let plastic = model.has_plastic_strain();
+            if plastic {
+                let ep = model.plastic_strains();
+                self.h5.write_rows_f64(
+                    &format!("{g}/plastic_strain"),
+                    self.n_elems,
+                    1,
+                    self.elem_start,
+                    &ep,
+                )?;
+                self.bytes_written += 8 * ep.len() as u64;
+            }
             self.h5.flush()?;
             self.bytes_written += 8 * (u.len() + flat.len() + vm.len()) as u64;
             let attr =
@@ -275,6 +287,16 @@ impl ResultsWriter {
                     attr("von_mises", Center::Cell, AttrKind::Scalar, self.n_elems, 1),
                 ],
             });
+            if plastic {
+                let last = self.steps.last_mut().expect("just pushed");
+                last.attrs.push(attr(
+                    "plastic_strain",
+                    Center::Cell,
+                    AttrKind::Scalar,
+                    self.n_elems,
+                    1,
+                ));
+            }
             let r = if comm.rank() == 0 {
                 write_xdmf(&self.xmf_path, &self.xmesh, &self.steps)
             } else {

@@ -39,6 +39,11 @@ pub const BUILTIN: &[(&str, &str, &str)] = &[
         "Cook's membrane, 3D finite strain, nu = 0.4999: hex8 F-bar against the published band",
         include_str!("scenes/cook-membrane.toml"),
     ),
+    (
+        "plastic-bar",
+        "J2 steel bar pulled to 60 % elongation between clamps: large plastic strain",
+        include_str!("scenes/plastic-bar.toml"),
+    ),
 ];
 
 /// The scene `alfe` and `alfe run` use when none is named.
