@@ -52,8 +52,8 @@ step = 1.0
     )
 }
 
-fn parse_cells(s: Option<&str>) -> Result<[usize; 3]> {
-    let Some(s) = s else { return Ok([44, 44, 44]) };
+pub(crate) fn parse_cells(s: Option<&str>, default: [usize; 3]) -> Result<[usize; 3]> {
+    let Some(s) = s else { return Ok(default) };
     let v: Vec<usize> = s
         .split(',')
         .map(|x| x.trim().parse::<usize>())
@@ -88,7 +88,7 @@ pub fn bench_linear(
     json: Option<&str>,
     export: Option<&str>,
 ) -> Result<()> {
-    let cells = parse_cells(cells)?;
+    let cells = parse_cells(cells, [44, 44, 44])?;
     let rtol: f64 = match rtol {
         None => 1e-8,
         Some(s) => s

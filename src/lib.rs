@@ -9,6 +9,7 @@
 
 pub mod app;
 pub mod bench;
+pub mod bench_residual;
 pub mod error;
 pub mod fem;
 pub mod material;

@@ -25,6 +25,8 @@ usage:
   alfe bench-linear [--cells NX,NY,NZ] [--rtol R] [--json FILE] [--export DIR]
                                          linear-elastic block: assembly, block-Jacobi, GMRES,
                                          HDF5 rates (scripts/bench-core uses it)
+  alfe bench-residual [--cells NX,NY,NZ] [--reps N] [--json FILE]
+                                         residual/tangent rates per material and formulation
 
 Run on several ranks with `mpirun -n N alfe run ...`.
 exit codes: 0 ok, 1 runtime failure, 2 bad input, 3 not converged";
@@ -210,6 +212,10 @@ fn main_inner(comm: &dyn Comm, raw: &[String]) -> Result<()> {
                 a.get("json"),
                 a.get("export"),
             )
+        }
+        "bench-residual" => {
+            let a = parse_args(rest, &["cells", "reps", "json"], &[])?;
+            alfe::bench_residual::bench_residual(comm, a.get("cells"), a.get("reps"), a.get("json"))
         }
         other => Err(Error::input(format!(
             "unknown command `{other}` (see `alfe --help`)"

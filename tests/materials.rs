@@ -15,7 +15,10 @@ fn cube_deck(material: &str, pull: f64, steps: usize) -> String {
     edit(
         &text,
         "step = 0.25\n",
-        &format!("step = {}\n[solver]\nresidual_rtol = 1e-11\n", 1.0 / steps as f64),
+        &format!(
+            "step = {}\n[solver]\nresidual_rtol = 1e-11\n",
+            1.0 / steps as f64
+        ),
     )
 }
 
@@ -44,7 +47,10 @@ fn mooney_rivlin_cube_tension_and_compression_match_closed_form() {
             let got = -rec.reactions[0][0];
             let e = rel_err(got, want);
             worst = worst.max(e);
-            assert!(e < 5e-3, "λ = {l}: reaction {got} vs closed form {want} ({e:.2e})");
+            assert!(
+                e < 5e-3,
+                "λ = {l}: reaction {got} vs closed form {want} ({e:.2e})"
+            );
             // Both ends carry the same force.
             assert!(rel_err(rec.reactions[1][0], got) < 1e-8);
         }
@@ -81,7 +87,10 @@ fn j2_cube_uniaxial_tension_matches_closed_form() {
             "λ = {l}: reaction {got} vs closed form {want}"
         );
     }
-    assert!(plastic_steps >= 29, "the path must be plastic: {plastic_steps}");
+    assert!(
+        plastic_steps >= 29,
+        "the path must be plastic: {plastic_steps}"
+    );
     // The equivalent plastic strain the output carries is the closed-form one.
     let ep = out.model.plastic_strains();
     let tau = (sy + h * 1.5f64.ln()) / (1.0 + h / e);

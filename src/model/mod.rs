@@ -485,9 +485,10 @@ impl Model {
     /// Whether any material carries an equivalent plastic strain (same on all ranks:
     /// every rank holds the whole material list).
     pub fn has_plastic_strain(&self) -> bool {
-        self.materials
-            .iter()
-            .any(|m| m.equivalent_plastic_strain(&vec![0.0; m.n_state()]).is_some())
+        self.materials.iter().any(|m| {
+            m.equivalent_plastic_strain(&vec![0.0; m.n_state()])
+                .is_some()
+        })
     }
 
     /// Equivalent plastic strain of every local element at the last committed state:

@@ -1,0 +1,131 @@
+//! `alfe bench-residual`: residual-evaluation and tangent-assembly rates (elements per
+//! second per rank) of the material/formulation pairs the scenes use, on one generated
+//! hex8 block at a fixed inhomogeneous deformation, on however many ranks it is started
+//! with. scripts/bench-core runs it on 1 and 2 ranks beside the linear benchmark.
+
+use crate::app::on_rank0;
+use crate::model::Model;
+use crate::parallel::Comm;
+use crate::partition::{distribute, partition_elements};
+use crate::{Error, Result};
+use std::time::Instant;
+
+/// (label, material table, part formulation).
+const CASES: &[(&str, &str, &str)] = &[
+    (
+        "linear-elastic, standard",
+        "model = \"linear-elastic\"\nE = 210000.0\nnu = 0.3",
+        "standard",
+    ),
+    (
+        "neo-hookean, standard",
+        "model = \"neo-hookean\"\nE = 210000.0\nnu = 0.3",
+        "standard",
+    ),
+    (
+        "mooney-rivlin, F-bar",
+        "model = \"mooney-rivlin\"\nC10 = 0.5508\nC01 = 0.1377\nnu = 0.4995",
+        "fbar",
+    ),
+    (
+        "j2 (plastic at every point), F-bar",
+        "model = \"j2\"\nE = 210000.0\nnu = 0.3\nyield_stress = 250.0\nhardening = { type = \"linear\", modulus = 1000.0 }",
+        "fbar",
+    ),
+];
+
+fn deck(cells: [usize; 3], material: &str, formulation: &str) -> String {
+    format!(
+        "[scene]\nname = \"bench-residual\"\nunits = \"mm-t-s\"\n\
+         [[materials]]\nname = \"m\"\n{material}\n\
+         [[parts]]\nname = \"block\"\nmaterial = \"m\"\nformulation = \"{formulation}\"\n\
+         mesh = {{ kind = \"box\", size = [1, 1, 1], cells = [{}, {}, {}] }}\n\
+         [analysis]\ntype = \"static\"\nend_time = 1.0\nstep = 1.0\n",
+        cells[0], cells[1], cells[2]
+    )
+}
+
+/// Median of `reps` timings of a collective action (barrier before and after each).
+fn median_seconds(comm: &dyn Comm, reps: usize, mut f: impl FnMut() -> Result<()>) -> Result<f64> {
+    let mut ts = Vec::with_capacity(reps);
+    for _ in 0..reps {
+        comm.barrier();
+        let t = Instant::now();
+        f()?;
+        comm.barrier();
+        ts.push(t.elapsed().as_secs_f64());
+    }
+    ts.sort_by(|a, b| a.total_cmp(b));
+    Ok(ts[ts.len() / 2])
+}
+
+pub fn bench_residual(
+    comm: &dyn Comm,
+    cells: Option<&str>,
+    reps: Option<&str>,
+    json: Option<&str>,
+) -> Result<()> {
+    let cells = crate::bench::parse_cells(cells, [30, 30, 30])?;
+    let reps: usize = match reps {
+        None => 5,
+        Some(s) => s
+            .parse()
+            .ok()
+            .filter(|&r: &usize| r >= 1)
+            .ok_or_else(|| Error::input(format!("--reps: expected a count ≥ 1, got `{s}`")))?,
+    };
+    let p = comm.size();
+    let mut rows = Vec::new();
+    for (label, material, formulation) in CASES {
+        let text = deck(cells, material, formulation);
+        let pieces = on_rank0(comm, || {
+            let src = crate::scene::Source {
+                text: text.clone(),
+                dir: ".".into(),
+                label: "bench-residual".into(),
+            };
+            let def = crate::scene::model(&src)?;
+            let part = partition_elements(&def.mesh, p)?;
+            Ok(distribute::split(&def, &part, p))
+        })?;
+        let local = distribute::scatter(comm, pieces)?;
+        let mut model = Model::new(comm, local)?;
+        // u = (F − I) X with F = diag(1.02, 0.99, 0.99) plus a smooth wiggle: a 2 %
+        // stretch is 17 yield strains for the J2 case, so every point returns.
+        let n = model.n_owned_dofs();
+        let u: Vec<f64> = (0..n)
+            .map(|i| {
+                let x = model.local.coords[i / 3];
+                let c = i % 3;
+                let stretch = [0.02, -0.01, -0.01][c] * x[c];
+                stretch + 2e-3 * (3.0 * x[0] + 2.0 * x[1] - x[2] + c as f64).sin()
+            })
+            .collect();
+        let mut r = vec![0.0; n];
+        model.residual(comm, &u, 1.0, &mut r)?;
+        let t_res = median_seconds(comm, reps, || {
+            model.residual(comm, &u, 1.0, &mut r).map(|_| ())
+        })?;
+        let mut k = model.new_matrix(comm);
+        let t_jac = median_seconds(comm, reps, || model.jacobian(comm, &u, 1.0, &mut k))?;
+        let elems = comm.allgather_f64(model.local.n_elems() as f64);
+        let max_elems = elems.iter().cloned().fold(0.0, f64::max);
+        rows.push(serde_json::json!({
+            "case": label,
+            "elements": model.local.n_elems_global,
+            "residual_s": t_res,
+            "residual_elems_per_s_per_rank": max_elems / t_res,
+            "jacobian_s": t_jac,
+            "jacobian_elems_per_s_per_rank": max_elems / t_jac,
+        }));
+    }
+    let out = serde_json::json!({ "ranks": p, "cells": cells, "reps": reps, "cases": rows });
+    if comm.rank() == 0 {
+        println!("{}", serde_json::to_string_pretty(&out).unwrap());
+        if let Some(j) = json {
+            std::fs::write(j, serde_json::to_string_pretty(&out).unwrap() + "\n")
+                .map_err(|e| Error::runtime(format!("cannot write `{j}`: {e}")))?;
+        }
+    }
+    Ok(())
+}
