@@ -131,6 +131,10 @@ pub struct Settings {
     pub analysis: AnalysisDeck,
     pub solver: SolverDeck,
     pub output: OutputDeck,
+    /// Initial velocities of dynamic runs: (node set, velocity), later entries win.
+    /// A `part` in the deck is a node set named `part:<name>`.
+    #[serde(default)]
+    pub initial_velocity: Vec<(String, [f64; 3])>,
 }
 
 #[derive(Debug, Clone, Serialize, Deserialize)]

@@ -3,6 +3,7 @@
 //! It knows physics and calls the parallel layer only through [`Comm`] and plans.
 
 pub mod def;
+pub mod dynamics;
 
 use crate::fem::element::{element_force, element_stress, n_gauss};
 use crate::fem::surface::{pressure_face, traction_face};
@@ -182,6 +183,25 @@ impl Model {
         t: f64,
         r: &mut [f64],
     ) -> Result<ResidualInfo> {
+        let n = u_owned.len();
+        let mut fi = vec![0.0; n];
+        let info = self.forces(comm, u_owned, t, &mut fi, r)?;
+        for i in 0..n {
+            r[i] = fi[i] - r[i];
+        }
+        Ok(info)
+    }
+
+    /// Internal and external forces on owned dofs (ghost contributions summed), as
+    /// [`Model::residual`] combines them. Collective.
+    pub fn forces(
+        &mut self,
+        comm: &dyn Comm,
+        u_owned: &[f64],
+        t: f64,
+        f_int_owned: &mut [f64],
+        f_ext_owned: &mut [f64],
+    ) -> Result<ResidualInfo> {
         let mut u_local = std::mem::take(&mut self.work);
         self.gather(comm, u_owned, &mut u_local);
         let nl = u_local.len();
@@ -197,7 +217,8 @@ impl Model {
         self.halo.reverse_add(comm, ghost_e, own_e);
         let mut sums = [0.0, 0.0, if failure.is_some() { 1.0 } else { 0.0 }];
         for i in 0..no {
-            r[i] = own_i[i] - own_e[i];
+            f_int_owned[i] = own_i[i];
+            f_ext_owned[i] = own_e[i];
             sums[0] += own_i[i] * own_i[i];
             sums[1] += own_e[i] * own_e[i];
         }

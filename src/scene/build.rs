@@ -288,31 +288,7 @@ pub fn build(deck: &Deck, deck_dir: &Path) -> Result<ModelDef> {
             format!("expected a positive time, got {}", a.end_time),
         ));
     }
-    if !(a.step > 0.0 && a.step <= a.end_time) {
-        return Err(err(
-            "analysis.step",
-            format!(
-                "expected 0 < step ≤ end_time ({}), got {}",
-                a.end_time, a.step
-            ),
-        ));
-    }
-    if let Some(m) = a.min_step {
-        if !(m > 0.0 && m <= a.step) {
-            return Err(err(
-                "analysis.min_step",
-                format!("expected 0 < min_step ≤ step ({}), got {m}", a.step),
-            ));
-        }
-    }
-    if let Some(m) = a.max_step {
-        if !(m >= a.step && m <= a.end_time) {
-            return Err(err(
-                "analysis.max_step",
-                format!("expected step ≤ max_step ≤ end_time, got {m}"),
-            ));
-        }
-    }
+    super::dynamics::check_analysis(deck)?;
     let curve = |field: String, name: &Option<String>| -> Result<Curve> {
         match name {
             None => Ok(Curve::ramp(a.end_time)),
@@ -514,6 +490,9 @@ pub fn build(deck: &Deck, deck_dir: &Path) -> Result<ModelDef> {
     if deck.output.every == 0 {
         return Err(err("output.every", "expected at least 1"));
     }
+    let initial_velocity =
+        super::dynamics::initial_velocities(deck, &part_nodes, &mut resolved_sets, &set_nodes)?;
+    super::dynamics::check_dynamic_inputs(deck, &part_material, &set_nodes, &mut resolved_sets)?;
     let reaction_sets = match &deck.output.reactions {
         Some(list) => {
             for (i, n) in list.iter().enumerate() {
@@ -549,6 +528,7 @@ pub fn build(deck: &Deck, deck_dir: &Path) -> Result<ModelDef> {
             analysis: deck.analysis.clone(),
             solver: deck.solver.clone(),
             output: deck.output.clone(),
+            initial_velocity,
         },
     })
 }

@@ -3,6 +3,7 @@
 
 pub mod build;
 pub mod deck;
+mod dynamics;
 
 use crate::{Error, Result};
 use std::path::{Path, PathBuf};
@@ -33,6 +34,11 @@ pub const BUILTIN: &[(&str, &str, &str)] = &[
         "cube-stretch",
         "neo-Hookean cube stretched to twice its length between rollers (closed-form stress)",
         include_str!("scenes/cube-stretch.toml"),
+    ),
+    (
+        "bar-vibration",
+        "fixed-free elastic bar released with a uniform axial velocity (implicit dynamics)",
+        include_str!("scenes/bar-vibration.toml"),
     ),
 ];
 
