@@ -455,7 +455,7 @@ fn bad_input_gets_one_clear_line_and_exit_code_2() {
         (
             "missing-field",
             edit(&good, "step = 0.1\n", ""),
-            "analysis: missing field `step`",
+            "analysis.step: missing field `step`",
         ),
         (
             "unknown-key",

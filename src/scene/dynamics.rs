@@ -30,14 +30,18 @@ pub fn check_analysis(deck: &Deck) -> Result<()> {
     let explicit = a.kind == AnalysisKind::Explicit;
     let step_given = a.step != 0.0;
     if (!explicit || step_given) && !(a.step > 0.0 && a.step <= a.end_time) {
-        let what = if step_given {
-            format!("got {}", a.step)
-        } else {
-            format!("missing (required for type = \"{kind}\")")
-        };
+        if !step_given {
+            return Err(err(
+                "analysis.step",
+                format!("missing field `step` (required for type = \"{kind}\")"),
+            ));
+        }
         return Err(err(
             "analysis.step",
-            format!("expected 0 < step ≤ end_time ({}), {what}", a.end_time),
+            format!(
+                "expected 0 < step ≤ end_time ({}), got {}",
+                a.end_time, a.step
+            ),
         ));
     }
     let only = |field: &str, given: bool, allowed: &[AnalysisKind]| -> Result<()> {
