@@ -26,8 +26,12 @@ pub fn consistent_mass(kind: ElemKind, x0: &[[f64; 3]], rho: f64, m: &mut [f64])
                 let w = rho * HEX8.weights[g] * det;
                 let n = &HEX8.n[g];
                 for a in 0..8 {
-                    for b in 0..8 {
-                        m[8 * a + b] += w * n[a] * n[b];
+                    for b in a..8 {
+                        let v = w * n[a] * n[b];
+                        m[8 * a + b] += v;
+                        if b != a {
+                            m[8 * b + a] += v;
+                        }
                     }
                 }
             }

@@ -2,6 +2,9 @@
 //! element matrices applied on the fly), mass into the Jacobian, the explicit stable
 //! time step, initial velocities and set-mean displacements for the history.
 
+// Index loops over several dof vectors at once read like the formulas.
+#![allow(clippy::needless_range_loop)]
+
 use super::Model;
 use crate::fem::mass::{consistent_mass, lumped_mass, max_frequency};
 use crate::parallel::Comm;

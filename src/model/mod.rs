@@ -216,9 +216,9 @@ impl Model {
         let (own_e, ghost_e) = f_ext.split_at_mut(no);
         self.halo.reverse_add(comm, ghost_e, own_e);
         let mut sums = [0.0, 0.0, if failure.is_some() { 1.0 } else { 0.0 }];
+        f_int_owned.copy_from_slice(own_i);
+        f_ext_owned.copy_from_slice(own_e);
         for i in 0..no {
-            f_int_owned[i] = own_i[i];
-            f_ext_owned[i] = own_e[i];
             sums[0] += own_i[i] * own_i[i];
             sums[1] += own_e[i] * own_e[i];
         }

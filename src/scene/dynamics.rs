@@ -183,7 +183,7 @@ pub fn check_dynamic_inputs(
     if deck.analysis.kind != AnalysisKind::Static {
         for &mi in part_material {
             let m = &deck.materials[mi];
-            if !(m.density > 0.0) {
+            if m.density.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
                 return Err(err(
                     format!("materials[{mi}].density"),
                     format!(

@@ -138,8 +138,8 @@ mod tests {
         for rho in [0.0, 0.5, 0.9] {
             let p = AlphaParams::generalized_alpha(rho);
             // ωΔt ≫ 1: the per-step amplification approaches ρ∞.
-            let r = spectral_radius(&p, 1e4, 1.0);
-            assert!((r - rho).abs() < 2e-3, "rho_inf {rho}: spectral radius {r}");
+            let r = spectral_radius(&p, 1e6, 1.0);
+            assert!((r - rho).abs() < 1e-3, "rho_inf {rho}: spectral radius {r}");
             // ωΔt = 2π/200: low modes keep their amplitude (< 0.1% loss per period).
             let low = amplitude_ratio(&p, 1.0, 2.0 * std::f64::consts::PI / 200.0, 10);
             let per_period = 1.0 - low.powf(0.1);
@@ -149,7 +149,7 @@ mod tests {
             );
         }
         let h = AlphaParams::hht(0.5);
-        let r = spectral_radius(&h, 1e4, 1.0);
+        let r = spectral_radius(&h, 1e6, 1.0);
         assert!((r - 0.5).abs() < 2e-3, "HHT spectral radius {r}");
     }
 

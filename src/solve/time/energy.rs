@@ -6,6 +6,9 @@
 //! Balance: KE + W_int − W_ext − KE₀ = 0 for an exact solution; the reported error is
 //! |KE + W_int − W_ext − KE₀| / max(KE, |W_int|, |W_ext|, KE₀).
 
+// Index loops over several dof vectors at once read like the formulas.
+#![allow(clippy::needless_range_loop)]
+
 use crate::parallel::Comm;
 
 /// The energies after a step (history columns).

@@ -9,6 +9,9 @@
 //! differences. Δt = dt_factor × min_e L_e / c_d ([`Model::stable_time_step`]), or the
 //! deck's fixed `step` if it is not above the stable step.
 
+// Index loops over several dof vectors at once read like the formulas.
+#![allow(clippy::needless_range_loop)]
+
 use super::energy::EnergyAccount;
 use super::{momentum, prescribed_motion, support_forces, DynObserver, DynState};
 use crate::model::dynamics::{MassMatrix, StableStep};

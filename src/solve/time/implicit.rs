@@ -9,6 +9,9 @@
 //! the time step, and the step grows back by 1.5 (up to `max_step`) after easy steps,
 //! as in static stepping ([`StepControl`]).
 
+// Index loops over several dof vectors at once read like the formulas.
+#![allow(clippy::needless_range_loop)]
+
 use super::alpha::AlphaParams;
 use super::energy::EnergyAccount;
 use super::{momentum, prescribed_motion, support_forces, DynObserver, DynState};

@@ -3,6 +3,9 @@
 //! [`crate::solve::nonlinear::NonlinearProblem`] in u_{n+1}) and explicit central
 //! difference ([`explicit`]), with the energy bookkeeping of [`energy`].
 
+// Index loops over several dof vectors at once read like the formulas.
+#![allow(clippy::needless_range_loop)]
+
 pub mod alpha;
 pub mod energy;
 pub mod explicit;
