@@ -6,10 +6,14 @@ use crate::model::Model;
 use crate::output::results::ResultsWriter;
 use crate::parallel::Comm;
 use crate::partition::{cache, distribute, quality};
-use crate::scene::deck::{FdStepDeck, NonlinearKind, PreconditionerKind};
+use crate::scene::deck::{AnalysisKind, FdStepDeck, NonlinearKind, PreconditionerKind};
 use crate::solve::linear::gmres::GmresOptions;
 use crate::solve::nonlinear::{FdRule, NonlinearOptions, SolverKind};
+use crate::solve::stepping::StepRecord;
 use crate::solve::stepping::{run_static, RunTotals};
+use crate::solve::time::explicit::run_explicit;
+use crate::solve::time::implicit::run_implicit;
+use crate::solve::time::{DynState, OutputClock};
 use crate::{Error, ErrorKind, Result};
 use std::path::PathBuf;
 use std::time::Instant;
@@ -39,8 +43,14 @@ pub struct Summary {
     pub nodes: usize,
     pub elements: usize,
     pub unknowns: usize,
-    /// The nonlinear solver used.
+    /// The nonlinear solver used (`central-difference` for explicit runs).
     pub solver: String,
+    /// `static`, `implicit` or `explicit`.
+    pub analysis: String,
+    /// The (first) time step: the deck's step, or the explicit step used.
+    pub time_step: f64,
+    /// Explicit runs: the stable step min_e L_e / c_d before the factor.
+    pub stable_time_step: Option<f64>,
     pub steps: usize,
     pub converged: bool,
     pub nonlinear_iterations: usize,
@@ -229,39 +239,96 @@ pub fn run(comm: &dyn Comm, opts: &RunOptions) -> Result<RunOutcome> {
     let nopts = solver_options(&model.local.settings, model.char_length(comm), opts.solver);
     let every = model.local.settings.output.every;
     let end_time = model.local.settings.analysis.end_time;
-    let n_steps =
-        crate::solve::stepping::step_times(end_time, model.local.settings.analysis.step).len();
+    let kind = model.local.settings.analysis.kind;
+    let n_steps = nominal_steps(&model.local.settings.analysis);
     let quiet = opts.quiet || comm.rank() != 0;
+    // Explicit runs: the time step from the mesh (an input error if the deck's is unstable).
+    let explicit_dt = if kind == AnalysisKind::Explicit {
+        Some(crate::solve::time::explicit::explicit_time_step(
+            comm, &model,
+        )?)
+    } else {
+        None
+    };
+    let method = match kind {
+        AnalysisKind::Explicit => "central-difference".to_string(),
+        _ => nopts.kind.name().to_string(),
+    };
     if !quiet {
         println!(
-            "alfe: scene {scene} on {} rank(s) with {}: {} nodes, {} elements, {} unknowns, {} nominal steps",
+            "alfe: scene {scene} on {} rank(s) with {method}: {} nodes, {} elements, {} unknowns, {} nominal steps",
             comm.size(),
-            nopts.kind.name(),
             model.local.n_nodes_global,
             model.local.n_elems_global,
             3 * model.local.n_nodes_global,
             n_steps
         );
+        if let Some((dt, st)) = &explicit_dt {
+            println!(
+                "explicit: stable step {:.4e} (L_e = {:.4e}, c_d = {:.4e}), using {dt:.4e}, {} steps",
+                st.dt,
+                st.length,
+                st.wave_speed,
+                (end_time / dt).ceil()
+            );
+        }
     }
     let mut u = Vec::new();
     let mut records = Vec::new();
     let set_names = model.local.reaction_sets.clone();
-    let totals: RunTotals = run_static(comm, &mut model, &mut u, &nopts, &mut |rec, u, m| {
-        let fields = rec.step % every == 0 || rec.time >= end_time;
-        writer.step(comm, rec, u, m, fields)?;
-        records.push(rec.clone());
-        if !quiet {
-            let reac = set_names
-                .iter()
-                .zip(&rec.reactions)
-                .map(|(n, f)| format!(" {n}=({:.4e}, {:.4e}, {:.4e})", f[0], f[1], f[2]))
-                .collect::<String>();
-            let retry = if rec.retries > 0 {
-                format!("  retries {}", rec.retries)
-            } else {
-                String::new()
-            };
-            println!(
+    let totals: RunTotals = if kind != AnalysisKind::Static {
+        let interval = model
+            .local
+            .settings
+            .output
+            .interval
+            .unwrap_or(end_time / 100.0);
+        let mut clock = OutputClock::new(interval, end_time);
+        let mut state = DynState::default();
+        let mut observe = |rec: &StepRecord, s: &DynState, m: &Model| -> Result<()> {
+            let fields = clock.due(rec.time);
+            let nodal: [(&str, &[f64]); 2] = [("velocity", &s.v), ("acceleration", &s.a)];
+            writer.step_with(comm, rec, &s.u, m, fields, &nodal)?;
+            records.push(rec.clone());
+            if !quiet && fields {
+                let e = rec.energies.unwrap_or_default();
+                println!(
+                    "step {:>6}  t={:<10.4e} ({:>3.0}%)  its {:>2}  KE={:.4e}  W_int={:.4e}  W_ext={:.4e}  balance={:.1e}",
+                    rec.step,
+                    rec.time,
+                    100.0 * rec.time / end_time,
+                    rec.stats.iterations,
+                    e.kinetic,
+                    e.internal,
+                    e.external,
+                    e.balance
+                );
+            }
+            Ok(())
+        };
+        let t = match explicit_dt {
+            Some((dt, _)) => run_explicit(comm, &mut model, &mut state, dt, &mut observe)?,
+            None => run_implicit(comm, &mut model, &mut state, &nopts, &mut observe)?,
+        };
+        u = state.u;
+        t
+    } else {
+        run_static(comm, &mut model, &mut u, &nopts, &mut |rec, u, m| {
+            let fields = rec.step % every == 0 || rec.time >= end_time;
+            writer.step(comm, rec, u, m, fields)?;
+            records.push(rec.clone());
+            if !quiet {
+                let reac = set_names
+                    .iter()
+                    .zip(&rec.reactions)
+                    .map(|(n, f)| format!(" {n}=({:.4e}, {:.4e}, {:.4e})", f[0], f[1], f[2]))
+                    .collect::<String>();
+                let retry = if rec.retries > 0 {
+                    format!("  retries {}", rec.retries)
+                } else {
+                    String::new()
+                };
+                println!(
                 "step {:>4}  t={:<10.4e} ({:>3.0}%)  {} {:>2}  gmres {:>4}  |r|/f={:.2e}  {:.2}s{retry}{reac}",
                 rec.step,
                 rec.time,
@@ -272,9 +339,10 @@ pub fn run(comm: &dyn Comm, opts: &RunOptions) -> Result<RunOutcome> {
                 rec.stats.residual_history.last().copied().unwrap_or(0.0),
                 rec.wall_seconds
             );
-        }
-        Ok(())
-    })?;
+            }
+            Ok(())
+        })?
+    };
     phases.assembly = totals.seconds_assembly;
     phases.linear_solve = totals.seconds_linear;
     phases.output = writer.seconds;
@@ -295,7 +363,17 @@ pub fn run(comm: &dyn Comm, opts: &RunOptions) -> Result<RunOutcome> {
         nodes: model.local.n_nodes_global,
         elements: model.local.n_elems_global,
         unknowns: 3 * model.local.n_nodes_global,
-        solver: nopts.kind.name().into(),
+        solver: method,
+        analysis: match kind {
+            AnalysisKind::Static => "static",
+            AnalysisKind::Implicit => "implicit",
+            AnalysisKind::Explicit => "explicit",
+        }
+        .into(),
+        time_step: explicit_dt
+            .map(|(dt, _)| dt)
+            .unwrap_or(model.local.settings.analysis.step),
+        stable_time_step: explicit_dt.map(|(_, s)| s.dt),
         steps: totals.steps,
         converged: totals.converged,
         nonlinear_iterations: totals.nonlinear_iterations,
@@ -381,8 +459,19 @@ fn describe(def: &ModelDef) -> String {
         def.loads.len(),
         def.node_sets.iter().map(|(k, v)| format!("{k} ({} nodes)", v.len())).collect::<Vec<_>>().join(", "),
         def.surfaces.iter().map(|(k, v)| format!("{k} ({} faces)", v.len())).collect::<Vec<_>>().join(", "),
-        crate::solve::stepping::step_times(def.settings.analysis.end_time, def.settings.analysis.step).len(),
+        nominal_steps(&def.settings.analysis),
     )
+}
+
+/// Steps at the deck's step size ("from the mesh" for explicit runs without one).
+fn nominal_steps(a: &crate::scene::deck::AnalysisDeck) -> String {
+    if a.step > 0.0 {
+        crate::solve::stepping::step_times(a.end_time, a.step)
+            .len()
+            .to_string()
+    } else {
+        "(time step from the mesh)".into()
+    }
 }
 
 fn describe_partition(def: &ModelDef, part: &[u32], ranks: usize) -> Result<String> {

@@ -2,5 +2,6 @@
 //! loads. Pure functions of element data: no MPI, no global numbering.
 
 pub mod element;
+pub mod mass;
 pub mod shape;
 pub mod surface;

@@ -182,6 +182,10 @@ pub struct Settings {
     pub analysis: AnalysisDeck,
     pub solver: SolverDeck,
     pub output: OutputDeck,
+    /// Initial velocities of dynamic runs: (node set, velocity), later entries win.
+    /// A `part` in the deck is a node set named `part:<name>`.
+    #[serde(default)]
+    pub initial_velocity: Vec<(String, [f64; 3])>,
 }
 
 #[derive(Debug, Clone, Serialize, Deserialize)]
@@ -199,8 +203,6 @@ pub struct ModelDef {
     pub loads: Vec<Load>,
     /// Node sets whose reaction forces are reported, in column order.
     pub reaction_sets: Vec<String>,
-    /// Node sets whose mean displacement is reported, in column order.
-    pub displacement_sets: Vec<String>,
     pub settings: Settings,
 }
 

@@ -3,6 +3,7 @@
 //! It knows physics and calls the parallel layer only through [`Comm`] and plans.
 
 pub mod def;
+pub mod dynamics;
 
 use crate::fem::element::{element_force, element_stress, n_gauss};
 use crate::fem::surface::{pressure_face, traction_face};
@@ -38,8 +39,6 @@ pub struct Model {
     state_new: Vec<f64>,
     /// Owned nodes of each reaction set.
     reaction_nodes: Vec<Vec<usize>>,
-    /// Owned nodes of each displacement set, and the set's global size.
-    displacement_nodes: Vec<(Vec<usize>, usize)>,
     /// Work vector over local dofs (owned + ghost).
     work: Vec<f64>,
     /// Total element evaluations (for rates).
@@ -116,20 +115,6 @@ impl Model {
                     .unwrap_or_default()
             })
             .collect();
-        let displacement_nodes = local
-            .displacement_sets
-            .iter()
-            .map(|s| {
-                let owned: Vec<usize> = local
-                    .node_sets
-                    .get(s)
-                    .map(|v| v.iter().copied().filter(|&n| n < local.n_owned()).collect())
-                    .unwrap_or_default();
-                let mut count = [owned.len() as f64];
-                comm.allreduce_sum(&mut count);
-                (owned, count[0] as usize)
-            })
-            .collect();
         let n_local_dofs = 3 * local.n_local_nodes();
         Ok(Self {
             materials,
@@ -143,7 +128,6 @@ impl Model {
             state_new: vec![0.0; s],
             state_offset,
             reaction_nodes,
-            displacement_nodes,
             work: vec![0.0; n_local_dofs],
             element_evaluations: 0,
             local,
@@ -199,6 +183,25 @@ impl Model {
         t: f64,
         r: &mut [f64],
     ) -> Result<ResidualInfo> {
+        let n = u_owned.len();
+        let mut fi = vec![0.0; n];
+        let info = self.forces(comm, u_owned, t, &mut fi, r)?;
+        for i in 0..n {
+            r[i] = fi[i] - r[i];
+        }
+        Ok(info)
+    }
+
+    /// Internal and external forces on owned dofs (ghost contributions summed), as
+    /// [`Model::residual`] combines them. Collective.
+    pub fn forces(
+        &mut self,
+        comm: &dyn Comm,
+        u_owned: &[f64],
+        t: f64,
+        f_int_owned: &mut [f64],
+        f_ext_owned: &mut [f64],
+    ) -> Result<ResidualInfo> {
         let mut u_local = std::mem::take(&mut self.work);
         self.gather(comm, u_owned, &mut u_local);
         let nl = u_local.len();
@@ -213,8 +216,9 @@ impl Model {
         let (own_e, ghost_e) = f_ext.split_at_mut(no);
         self.halo.reverse_add(comm, ghost_e, own_e);
         let mut sums = [0.0, 0.0, if failure.is_some() { 1.0 } else { 0.0 }];
+        f_int_owned.copy_from_slice(own_i);
+        f_ext_owned.copy_from_slice(own_e);
         for i in 0..no {
-            r[i] = own_i[i] - own_e[i];
             sums[0] += own_i[i] * own_i[i];
             sums[1] += own_e[i] * own_e[i];
         }
@@ -460,26 +464,6 @@ impl Model {
         }
         comm.allreduce_sum(&mut sums);
         sums.chunks(3).map(|c| [c[0], c[1], c[2]]).collect()
-    }
-
-    /// Mean displacement of each displacement set (collective).
-    pub fn mean_displacements(&self, comm: &dyn Comm, u_owned: &[f64]) -> Vec<[f64; 3]> {
-        let mut sums = vec![0.0; 3 * self.displacement_nodes.len()];
-        for (s, (nodes, _)) in self.displacement_nodes.iter().enumerate() {
-            for &n in nodes {
-                for c in 0..3 {
-                    sums[3 * s + c] += u_owned[3 * n + c];
-                }
-            }
-        }
-        comm.allreduce_sum(&mut sums);
-        sums.chunks(3)
-            .zip(&self.displacement_nodes)
-            .map(|(c, (_, count))| {
-                let k = (*count).max(1) as f64;
-                [c[0] / k, c[1] / k, c[2] / k]
-            })
-            .collect()
     }
 
     /// Whether any material carries an equivalent plastic strain (same on all ranks:

@@ -149,10 +149,13 @@ impl ResultsWriter {
                 for s in &l.reaction_sets {
                     head.push_str(&format!(",{s}.fx,{s}.fy,{s}.fz"));
                 }
-                for s in &l.displacement_sets {
+                head.push_str(",residual_evaluations,factorizations,final_relative_residual,assembly_s,linear_s");
+                for s in &l.settings.output.displacements {
                     head.push_str(&format!(",{s}.ux,{s}.uy,{s}.uz"));
                 }
-                head.push_str(",residual_evaluations,factorizations,final_relative_residual,assembly_s,linear_s");
+                if l.settings.analysis.kind != crate::scene::deck::AnalysisKind::Static {
+                    head.push_str(",kinetic_energy,internal_energy,external_work,energy_balance");
+                }
                 writeln!(f, "{head}")?;
                 history = Some(f);
                 Ok(())
@@ -189,8 +192,21 @@ impl ResultsWriter {
         model: &Model,
         fields: bool,
     ) -> Result<()> {
+        self.step_with(comm, rec, u, model, fields, &[])
+    }
+
+    /// [`ResultsWriter::step`] with more nodal vector fields (n_nodes × 3, owned rows)
+    /// written beside the displacement: velocity and acceleration of dynamic runs.
+    pub fn step_with(
+        &mut self,
+        comm: &dyn Comm,
+        rec: &StepRecord,
+        u: &[f64],
+        model: &Model,
+        fields: bool,
+        nodal: &[(&str, &[f64])],
+    ) -> Result<()> {
         let t0 = std::time::Instant::now();
-        let mean_u = model.mean_displacements(comm, u);
         let r = if let Some(f) = self.history.as_mut() {
             let s = &rec.stats;
             let mut row = format!(
@@ -202,7 +218,7 @@ impl ResultsWriter {
                 rec.retries,
                 rec.wall_seconds
             );
-            for f3 in rec.reactions.iter().chain(&mean_u) {
+            for f3 in &rec.reactions {
                 row.push_str(&format!(",{:.12e},{:.12e},{:.12e}", f3[0], f3[1], f3[2]));
             }
             row.push_str(&format!(
@@ -213,6 +229,15 @@ impl ResultsWriter {
                 s.seconds_assembly,
                 s.seconds_linear
             ));
+            for d in &rec.displacements {
+                row.push_str(&format!(",{:.12e},{:.12e},{:.12e}", d[0], d[1], d[2]));
+            }
+            if let Some(e) = &rec.energies {
+                row.push_str(&format!(
+                    ",{:.12e},{:.12e},{:.12e},{:.6e}",
+                    e.kinetic, e.internal, e.external, e.balance
+                ));
+            }
             writeln!(f, "{row}")
                 .and_then(|_| f.flush())
                 .map_err(Error::from)
@@ -260,6 +285,16 @@ impl ResultsWriter {
                 )?;
                 self.bytes_written += 8 * ep.len() as u64;
             }
+            for (name, v) in nodal {
+                self.h5.write_rows_f64(
+                    &format!("{g}/{name}"),
+                    self.n_nodes,
+                    3,
+                    self.node_start,
+                    v,
+                )?;
+                self.bytes_written += 8 * v.len() as u64;
+            }
             self.h5.flush()?;
             self.bytes_written += 8 * (u.len() + flat.len() + vm.len()) as u64;
             let attr =
@@ -273,19 +308,23 @@ impl ResultsWriter {
                     number_type: "Float",
                     precision: 8,
                 };
+            let mut attrs = vec![
+                attr(
+                    "displacement",
+                    Center::Node,
+                    AttrKind::Vector,
+                    self.n_nodes,
+                    3,
+                ),
+                attr("stress", Center::Cell, AttrKind::Tensor6, self.n_elems, 6),
+                attr("von_mises", Center::Cell, AttrKind::Scalar, self.n_elems, 1),
+            ];
+            for (name, _) in nodal {
+                attrs.push(attr(name, Center::Node, AttrKind::Vector, self.n_nodes, 3));
+            }
             self.steps.push(XdmfStep {
                 time: rec.time,
-                attrs: vec![
-                    attr(
-                        "displacement",
-                        Center::Node,
-                        AttrKind::Vector,
-                        self.n_nodes,
-                        3,
-                    ),
-                    attr("stress", Center::Cell, AttrKind::Tensor6, self.n_elems, 6),
-                    attr("von_mises", Center::Cell, AttrKind::Scalar, self.n_elems, 1),
-                ],
+                attrs,
             });
             if plastic {
                 let last = self.steps.last_mut().expect("just pushed");

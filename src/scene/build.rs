@@ -268,31 +268,7 @@ pub fn build(deck: &Deck, deck_dir: &Path) -> Result<ModelDef> {
             format!("expected a positive time, got {}", a.end_time),
         ));
     }
-    if !(a.step > 0.0 && a.step <= a.end_time) {
-        return Err(err(
-            "analysis.step",
-            format!(
-                "expected 0 < step ≤ end_time ({}), got {}",
-                a.end_time, a.step
-            ),
-        ));
-    }
-    if let Some(m) = a.min_step {
-        if !(m > 0.0 && m <= a.step) {
-            return Err(err(
-                "analysis.min_step",
-                format!("expected 0 < min_step ≤ step ({}), got {m}", a.step),
-            ));
-        }
-    }
-    if let Some(m) = a.max_step {
-        if !(m >= a.step && m <= a.end_time) {
-            return Err(err(
-                "analysis.max_step",
-                format!("expected step ≤ max_step ≤ end_time, got {m}"),
-            ));
-        }
-    }
+    super::dynamics::check_analysis(deck)?;
     let curve = |field: String, name: &Option<String>| -> Result<Curve> {
         match name {
             None => Ok(Curve::ramp(a.end_time)),
@@ -494,6 +470,9 @@ pub fn build(deck: &Deck, deck_dir: &Path) -> Result<ModelDef> {
     if deck.output.every == 0 {
         return Err(err("output.every", "expected at least 1"));
     }
+    let initial_velocity =
+        super::dynamics::initial_velocities(deck, &part_nodes, &mut resolved_sets, &set_nodes)?;
+    super::dynamics::check_dynamic_inputs(deck, &part_material, &set_nodes, &mut resolved_sets)?;
     let reaction_sets = match &deck.output.reactions {
         Some(list) => {
             for (i, n) in list.iter().enumerate() {
@@ -513,11 +492,6 @@ pub fn build(deck: &Deck, deck_dir: &Path) -> Result<ModelDef> {
         }
     };
 
-    for (i, n) in deck.output.displacements.iter().enumerate() {
-        let nodes = set_nodes(format!("output.displacements[{i}]"), n)?;
-        resolved_sets.insert(n.clone(), nodes);
-    }
-
     Ok(ModelDef {
         mesh,
         part_names: deck.parts.iter().map(|p| p.name.clone()).collect(),
@@ -529,13 +503,13 @@ pub fn build(deck: &Deck, deck_dir: &Path) -> Result<ModelDef> {
         constraints,
         loads,
         reaction_sets,
-        displacement_sets: deck.output.displacements.clone(),
         settings: Settings {
             scene: deck.scene.name.clone(),
             units: deck.scene.units,
             analysis: deck.analysis.clone(),
             solver: deck.solver.clone(),
             output: deck.output.clone(),
+            initial_velocity,
         },
     })
 }
@@ -614,7 +588,7 @@ fn part_mesh(m: &MeshDeck, f: &str, part: u32, deck_dir: &Path) -> Result<Mesh> 
             for i in 0..4 {
                 let (a, b, c) = (corners[i], corners[(i + 1) % 4], corners[(i + 2) % 4]);
                 let cross = (b[0] - a[0]) * (c[1] - b[1]) - (b[1] - a[1]) * (c[0] - b[0]);
-                if !(cross > 0.0) {
+                if cross.is_nan() || cross <= 0.0 {
                     return Err(err(
                         format!("{f}.mesh.corners"),
                         "expected a convex quadrilateral, corners counter-clockwise",

@@ -26,6 +26,20 @@ pub struct Deck {
     pub solver: SolverDeck,
     #[serde(default)]
     pub output: OutputDeck,
+    /// Initial velocities of dynamic analyses (later entries win where sets overlap).
+    #[serde(default)]
+    pub initial_velocity: Vec<InitialVelocityDeck>,
+}
+
+/// An initial velocity on a part or a node set (exactly one of `part`, `set`).
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct InitialVelocityDeck {
+    #[serde(default)]
+    pub part: Option<String>,
+    #[serde(default)]
+    pub set: Option<String>,
+    pub velocity: [f64; 3],
 }
 
 #[derive(Debug, Clone, Deserialize, Serialize)]
@@ -341,7 +355,32 @@ pub enum LoadDeck {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum AnalysisKind {
+    /// Load stepping over pseudo-time.
     Static,
+    /// Implicit dynamics (generalized-α family).
+    Implicit,
+    /// Explicit central difference with lumped mass.
+    Explicit,
+}
+
+/// Implicit time integration schemes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum SchemeKind {
+    /// Newmark trapezoidal rule (β = 1/4, γ = 1/2): no numerical damping.
+    Newmark,
+    /// Chung & Hulbert (1993) generalized-α with parameters from `rho_inf`.
+    GeneralizedAlpha,
+    /// Hilber–Hughes–Taylor α (α_m = 0) with α_f from `rho_inf` ∈ [1/2, 1].
+    HhtAlpha,
+}
+
+/// Mass matrix of implicit dynamics.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum MassKind {
+    Consistent,
+    Lumped,
 }
 
 #[derive(Debug, Clone, Deserialize, Serialize)]
@@ -351,7 +390,10 @@ pub struct AnalysisDeck {
     pub kind: AnalysisKind,
     /// Pseudo-time at the end of the load path.
     pub end_time: f64,
-    /// Pseudo-time step (the first step, and the largest unless `max_step` says).
+    /// Static: pseudo-time step; implicit: the time step Δt (the first, and the largest
+    /// unless `max_step` says); explicit: an optional fixed Δt (0 = not given: the stable
+    /// step from the mesh times `dt_factor`). Required unless explicit.
+    #[serde(default)]
     pub step: f64,
     /// Smallest step a failing step may be cut to before the run ends (default step/1000).
     #[serde(default)]
@@ -359,6 +401,18 @@ pub struct AnalysisDeck {
     /// Largest step after growth (default `step`).
     #[serde(default)]
     pub max_step: Option<f64>,
+    /// Implicit: the scheme (default generalized-alpha).
+    #[serde(default)]
+    pub scheme: Option<SchemeKind>,
+    /// Implicit generalized-α / HHT: spectral radius at infinite frequency (default 0.9).
+    #[serde(default)]
+    pub rho_inf: Option<f64>,
+    /// Implicit: consistent (default) or lumped mass.
+    #[serde(default)]
+    pub mass: Option<MassKind>,
+    /// Explicit: Δt = dt_factor × the stable step (default 0.9, LS-DYNA's TSSFAC).
+    #[serde(default)]
+    pub dt_factor: Option<f64>,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize, Default)]
@@ -516,6 +570,10 @@ pub struct OutputDeck {
     /// Node sets whose reaction forces go to the history; default: every constrained set.
     #[serde(default)]
     pub reactions: Option<Vec<String>>,
+    /// Dynamic runs: write fields at every multiple of this time (and the last step);
+    /// default end_time / 100.
+    #[serde(default)]
+    pub interval: Option<f64>,
     /// Node sets whose mean displacement goes to the history (`<set>.ux, .uy, .uz`).
     #[serde(default)]
     pub displacements: Vec<String>,
@@ -530,6 +588,7 @@ impl Default for OutputDeck {
         Self {
             every: 1,
             reactions: None,
+            interval: None,
             displacements: Vec::new(),
         }
     }
@@ -602,9 +661,9 @@ step = 0.5
 
     #[test]
     fn missing_field_is_reported() {
-        let bad = MIN.replace("step = 0.5\n", "");
+        let bad = MIN.replace("end_time = 1.0\n", "");
         let e = parse(&bad).unwrap_err();
-        assert!(e.contains("analysis") && e.contains("step"), "{e}");
+        assert!(e.contains("analysis") && e.contains("end_time"), "{e}");
     }
 
     #[test]

@@ -3,6 +3,7 @@
 
 pub mod build;
 pub mod deck;
+mod dynamics;
 
 use crate::{Error, Result};
 use std::path::{Path, PathBuf};
@@ -43,6 +44,11 @@ pub const BUILTIN: &[(&str, &str, &str)] = &[
         "plastic-bar",
         "J2 steel bar pulled to 60 % elongation between clamps: large plastic strain",
         include_str!("scenes/plastic-bar.toml"),
+    ),
+    (
+        "bar-vibration",
+        "fixed-free elastic bar released with a uniform axial velocity (implicit dynamics)",
+        include_str!("scenes/bar-vibration.toml"),
     ),
 ];
 

@@ -1,6 +1,7 @@
 //! Solvers: distributed linear algebra ([`linear`]), nonlinear solvers ([`nonlinear`])
-//! and load stepping ([`stepping`]).
+//! load stepping ([`stepping`]) and time integration ([`time`]).
 
 pub mod linear;
 pub mod nonlinear;
 pub mod stepping;
+pub mod time;

@@ -36,6 +36,10 @@ pub struct StepRecord {
     /// Reaction force of each reaction set (model order).
     pub reactions: Vec<[f64; 3]>,
     pub wall_seconds: f64,
+    /// Mean displacement of each `[output] displacements` set.
+    pub displacements: Vec<[f64; 3]>,
+    /// Energies of dynamic runs (None for static ones).
+    pub energies: Option<crate::solve::time::energy::Energies>,
 }
 
 /// Totals over the run.
@@ -161,6 +165,12 @@ pub fn run_static(
             stats,
             retries,
             wall_seconds: t0.elapsed().as_secs_f64(),
+            displacements: model.mean_displacements(
+                comm,
+                u,
+                &model.local.settings.output.displacements,
+            ),
+            energies: None,
         };
         on_step(&rec, u, model)?;
         if easy && retries == 0 {

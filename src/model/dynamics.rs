@@ -1,0 +1,256 @@
+//! What dynamics needs from the distributed model: mass (lumped vector or consistent
+//! element matrices applied on the fly), mass into the Jacobian, the explicit stable
+//! time step, initial velocities and set-mean displacements for the history.
+
+// Index loops over several dof vectors at once read like the formulas.
+#![allow(clippy::needless_range_loop)]
+
+use super::Model;
+use crate::fem::mass::{consistent_mass, lumped_mass, max_frequency};
+use crate::parallel::Comm;
+use crate::solve::linear::matrix::DistMatrix;
+use crate::{Error, Result};
+
+/// The mass operator of a dynamic run.
+#[derive(Debug, Clone)]
+pub enum MassMatrix {
+    /// Row-sum lumped masses on owned dofs (3 equal entries per node).
+    Lumped(Vec<f64>),
+    /// ρ ∫ N_a N_b dV, applied element by element.
+    Consistent,
+}
+
+/// The explicit stable step and where it comes from.
+#[derive(Debug, Clone, Copy)]
+pub struct StableStep {
+    /// min_e L_e / c_d over the whole model (before the safety factor).
+    pub dt: f64,
+    /// The smallest characteristic length L_e = 2 c_d / ω_e.
+    pub length: f64,
+    /// Dilatational wave speed √((K + 4G/3)/ρ) of that element's material.
+    pub wave_speed: f64,
+}
+
+impl Model {
+    fn elem_x0(&self, e: usize, x0: &mut [[f64; 3]; 8]) -> usize {
+        let nodes = self.local.elem_nodes(e);
+        for (a, &n) in nodes.iter().enumerate() {
+            x0[a] = self.local.coords[n];
+        }
+        nodes.len()
+    }
+
+    fn density(&self, e: usize) -> f64 {
+        self.materials[self.local.elem_material[e] as usize].density()
+    }
+
+    /// Lumped (row-sum) mass on owned dofs, ghost contributions summed (collective).
+    pub fn lumped_mass(&self, comm: &dyn Comm) -> Vec<f64> {
+        let mut m = vec![0.0; 3 * self.local.n_local_nodes()];
+        let mut x0 = [[0.0; 3]; 8];
+        let mut me = [0.0; 8];
+        for e in 0..self.local.n_elems() {
+            let n = self.elem_x0(e, &mut x0);
+            lumped_mass(self.local.kinds[e], &x0[..n], self.density(e), &mut me[..n]);
+            for (a, &node) in self.local.elem_nodes(e).iter().enumerate() {
+                for c in 0..3 {
+                    m[3 * node + c] += me[a];
+                }
+            }
+        }
+        let no = self.n_owned_dofs();
+        let (own, ghost) = m.split_at_mut(no);
+        self.halo.reverse_add(comm, ghost, own);
+        m.truncate(no);
+        m
+    }
+
+    /// out = M v on owned dofs (collective for the consistent mass).
+    pub fn apply_mass(&self, comm: &dyn Comm, mass: &MassMatrix, v: &[f64], out: &mut [f64]) {
+        match mass {
+            MassMatrix::Lumped(m) => {
+                for i in 0..v.len() {
+                    out[i] = m[i] * v[i];
+                }
+            }
+            MassMatrix::Consistent => {
+                let mut vl = Vec::new();
+                self.gather(comm, v, &mut vl);
+                let mut f = vec![0.0; vl.len()];
+                let mut x0 = [[0.0; 3]; 8];
+                let mut me = [0.0; 64];
+                for e in 0..self.local.n_elems() {
+                    let n = self.elem_x0(e, &mut x0);
+                    consistent_mass(
+                        self.local.kinds[e],
+                        &x0[..n],
+                        self.density(e),
+                        &mut me[..n * n],
+                    );
+                    let nodes = self.local.elem_nodes(e);
+                    for (a, &na) in nodes.iter().enumerate() {
+                        for (b, &nb) in nodes.iter().enumerate() {
+                            let m = me[a * n + b];
+                            for c in 0..3 {
+                                f[3 * na + c] += m * vl[3 * nb + c];
+                            }
+                        }
+                    }
+                }
+                let no = v.len();
+                let (own, ghost) = f.split_at_mut(no);
+                self.halo.reverse_add(comm, ghost, own);
+                out.copy_from_slice(own);
+            }
+        }
+    }
+
+    /// k += scale · M (after [`Model::jacobian`]; collective: finishes the assembly again).
+    pub fn add_mass(&self, comm: &dyn Comm, mass: &MassMatrix, scale: f64, k: &mut DistMatrix) {
+        match mass {
+            MassMatrix::Lumped(m) => {
+                for i in 0..self.local.n_owned() {
+                    let b = self.node_block[i];
+                    let d = scale * m[3 * i];
+                    k.add_block(b, b, &[d, 0.0, 0.0, 0.0, d, 0.0, 0.0, 0.0, d]);
+                }
+            }
+            MassMatrix::Consistent => {
+                let mut x0 = [[0.0; 3]; 8];
+                let mut me = [0.0; 64];
+                let mut ke = [0.0; 576];
+                let mut blocks = [0usize; 8];
+                for e in 0..self.local.n_elems() {
+                    let n = self.elem_x0(e, &mut x0);
+                    consistent_mass(
+                        self.local.kinds[e],
+                        &x0[..n],
+                        self.density(e),
+                        &mut me[..n * n],
+                    );
+                    let w = 3 * n;
+                    ke[..w * w].fill(0.0);
+                    for a in 0..n {
+                        for b in 0..n {
+                            for c in 0..3 {
+                                ke[(3 * a + c) * w + 3 * b + c] = scale * me[a * n + b];
+                            }
+                        }
+                    }
+                    for (a, &node) in self.local.elem_nodes(e).iter().enumerate() {
+                        blocks[a] = self.node_block[node];
+                    }
+                    k.add_element(&blocks[..n], &ke[..w * w]);
+                }
+            }
+        }
+        k.finish_assembly(comm);
+    }
+
+    /// The explicit stable step min_e L_e / c_d with L_e = 2 c_d / ω_e, ω_e the element's
+    /// highest frequency with lumped mass at the reference state ([`max_frequency`]),
+    /// and c_d = √((K + 4G/3)/ρ). One reduction.
+    pub fn stable_time_step(&self, comm: &dyn Comm) -> Result<StableStep> {
+        // Reduce [−dt, −L, c_d of that element] by max on −dt: one allreduce of the
+        // minimum dt, then the owner of the minimum reports L and c_d (second reduction
+        // of two numbers; cheap and only at start-up).
+        let mut best = (f64::INFINITY, 0.0, 0.0);
+        let mut failure = None;
+        let mut x0 = [[0.0; 3]; 8];
+        for e in 0..self.local.n_elems() {
+            let n = self.elem_x0(e, &mut x0);
+            let mat = self.materials[self.local.elem_material[e] as usize].as_ref();
+            let (s0, s1) = (self.state_offset[e], self.state_offset[e + 1]);
+            match max_frequency(
+                self.local.kinds[e],
+                self.local.elem_formulation[e],
+                &x0[..n],
+                mat,
+                &self.state_old[s0..s1],
+            ) {
+                Ok(w) => {
+                    let cd = ((mat.bulk_modulus() + 4.0 / 3.0 * mat.shear_modulus())
+                        / mat.density())
+                    .sqrt();
+                    let dt = 2.0 / w;
+                    if dt < best.0 {
+                        best = (dt, cd * dt, cd);
+                    }
+                }
+                Err(why) => {
+                    failure.get_or_insert(format!("element {}: {why}", self.local.orig_elem[e]));
+                }
+            }
+        }
+        if !comm.all_ok(failure.is_none()) {
+            return Err(Error::runtime(format!(
+                "stable time step: {}",
+                failure.unwrap_or_else(|| "an element on another rank failed".into())
+            )));
+        }
+        let mut m = [-best.0];
+        comm.allreduce_max(&mut m);
+        let dt = -m[0];
+        let mine = if best.0 == dt { 1.0 } else { 0.0 };
+        let mut lc = [mine, mine * best.1, mine * best.2];
+        comm.allreduce_sum(&mut lc);
+        let k = lc[0].max(1.0);
+        Ok(StableStep {
+            dt,
+            length: lc[1] / k,
+            wave_speed: lc[2] / k,
+        })
+    }
+
+    /// Initial velocity on owned dofs from the deck's `[[initial_velocity]]`.
+    pub fn initial_velocity(&self) -> Vec<f64> {
+        let no = self.local.n_owned();
+        let mut v = vec![0.0; 3 * no];
+        for (set, vel) in &self.local.settings.initial_velocity {
+            for &n in self
+                .local
+                .node_sets
+                .get(set)
+                .map(|s| s.as_slice())
+                .unwrap_or(&[])
+            {
+                if n < no {
+                    v[3 * n..3 * n + 3].copy_from_slice(vel);
+                }
+            }
+        }
+        v
+    }
+
+    /// Mean displacement of each named node set over all ranks (one reduction).
+    pub fn mean_displacements(&self, comm: &dyn Comm, u: &[f64], sets: &[String]) -> Vec<[f64; 3]> {
+        if sets.is_empty() {
+            return Vec::new();
+        }
+        let no = self.local.n_owned();
+        let mut s = vec![0.0; 4 * sets.len()];
+        for (i, name) in sets.iter().enumerate() {
+            for &n in self
+                .local
+                .node_sets
+                .get(name)
+                .map(|v| v.as_slice())
+                .unwrap_or(&[])
+            {
+                if n < no {
+                    for c in 0..3 {
+                        s[4 * i + c] += u[3 * n + c];
+                    }
+                    s[4 * i + 3] += 1.0;
+                }
+            }
+        }
+        comm.allreduce_sum(&mut s);
+        s.chunks(4)
+            .map(|c| {
+                let k = c[3].max(1.0);
+                [c[0] / k, c[1] / k, c[2] / k]
+            })
+            .collect()
+    }
+}

@@ -1,0 +1,173 @@
+//! Explicit central difference with the lumped mass, in velocity-Verlet form (the same
+//! scheme, with full-step velocities for the kinetic energy):
+//!
+//!   v_{n+½} = v_n + ½Δt a_n,   u_{n+1} = u_n + Δt v_{n+½},
+//!   a_{n+1} = M_l⁻¹ (f_ext(t_{n+1}) − f_int(u_{n+1})),   v_{n+1} = v_{n+½} + ½Δt a_{n+1}.
+//!
+//! One residual evaluation (collective: the halo sum of the element forces) per step.
+//! Prescribed dofs follow their constraint: u = g(t), with ġ and g̈ by central
+//! differences. Δt = dt_factor × min_e L_e / c_d ([`Model::stable_time_step`]), or the
+//! deck's fixed `step` if it is not above the stable step.
+
+// Index loops over several dof vectors at once read like the formulas.
+#![allow(clippy::needless_range_loop)]
+
+use super::energy::EnergyAccount;
+use super::{momentum, prescribed_motion, support_forces, DynObserver, DynState};
+use crate::model::dynamics::{MassMatrix, StableStep};
+use crate::model::Model;
+use crate::parallel::Comm;
+use crate::solve::nonlinear::SolveStats;
+use crate::solve::stepping::{RunTotals, StepRecord};
+use crate::{Error, Result};
+use std::time::Instant;
+
+/// LS-DYNA's default time-step scale factor (TSSFAC).
+pub const DEFAULT_DT_FACTOR: f64 = 0.9;
+
+/// The time step of an explicit run and the stable step it derives from. A deck `step`
+/// above the stable step is an input error naming `analysis.step`.
+pub fn explicit_time_step(comm: &dyn Comm, model: &Model) -> Result<(f64, StableStep)> {
+    let a = &model.local.settings.analysis;
+    let stable = model.stable_time_step(comm)?;
+    if a.step > 0.0 {
+        if a.step > stable.dt {
+            return Err(Error::input(format!(
+                "analysis.step: {:.6e} is above the stable time step {:.6e} (min L_e/c_d: L_e = {:.4e}, c_d = {:.4e}); use a smaller step or leave it out",
+                a.step, stable.dt, stable.length, stable.wave_speed
+            )));
+        }
+        Ok((a.step, stable))
+    } else {
+        Ok((a.dt_factor.unwrap_or(DEFAULT_DT_FACTOR) * stable.dt, stable))
+    }
+}
+
+/// Run the explicit analysis; `on_step` sees the initial state (step 0) and every step.
+pub fn run_explicit(
+    comm: &dyn Comm,
+    model: &mut Model,
+    state: &mut DynState,
+    dt: f64,
+    on_step: &mut DynObserver,
+) -> Result<RunTotals> {
+    let end = model.local.settings.analysis.end_time;
+    let disp_sets = model.local.settings.output.displacements.clone();
+    let m = model.lumped_mass(comm);
+    let n = model.n_owned_dofs();
+    let mut tot = RunTotals::default();
+    let mut t0 = Instant::now();
+    let mut is_c = vec![false; n];
+    for &(d, _) in &model.constrained_owned {
+        is_c[d] = true;
+    }
+
+    let motion = prescribed_motion(model, 0.0, dt);
+    state.u = vec![0.0; n];
+    state.v = model.initial_velocity();
+    state.a = vec![0.0; n];
+    let mut fi = vec![0.0; n];
+    let mut fe = vec![0.0; n];
+    for &(d, g, gd, _) in &motion {
+        state.u[d] = g;
+        state.v[d] = gd;
+    }
+    let ta = Instant::now();
+    model.forces(comm, &state.u, 0.0, &mut fi, &mut fe)?;
+    tot.seconds_assembly += ta.elapsed().as_secs_f64();
+    tot.residual_evaluations += 1;
+    for i in 0..n {
+        state.a[i] = (fe[i] - fi[i]) / m[i];
+    }
+    for &(d, _, _, gdd) in &motion {
+        state.a[d] = gdd;
+    }
+    let mass = MassMatrix::Lumped(m);
+    let (react, g) = support_forces(comm, model, &mass, &state.a, &fi, &fe);
+    let mv = momentum(comm, model, &mass, &state.v);
+    let mut energy = EnergyAccount::new(fi.clone(), g, 0.5 * comm.dot(&state.v, &mv));
+    let stats = |evals: usize| SolveStats {
+        converged: true,
+        residual_evaluations: evals,
+        ..SolveStats::default()
+    };
+    on_step(
+        &StepRecord {
+            step: 0,
+            time: 0.0,
+            stats: stats(1),
+            retries: 0,
+            reactions: model.reactions(comm, &react),
+            wall_seconds: t0.elapsed().as_secs_f64(),
+            displacements: model.mean_displacements(comm, &state.u, &disp_sets),
+            energies: Some(energy.current),
+        },
+        state,
+        model,
+    )?;
+    let MassMatrix::Lumped(m) = &mass else {
+        unreachable!()
+    };
+    let mut t = 0.0;
+    let mut step = 0;
+    let mut du = vec![0.0; n];
+    t0 = Instant::now();
+    while t < end * (1.0 - 1e-12) {
+        let mut t1 = t + dt;
+        if t1 > end * (1.0 - 1e-9) || end - t1 < 1e-3 * dt {
+            t1 = end;
+        }
+        let h = t1 - t;
+        for i in 0..n {
+            let vh = state.v[i] + 0.5 * h * state.a[i];
+            du[i] = h * vh;
+            state.v[i] = vh;
+        }
+        let motion = prescribed_motion(model, t1, h);
+        for &(d, g, _, _) in &motion {
+            du[d] = g - state.u[d];
+        }
+        for i in 0..n {
+            state.u[i] += du[i];
+        }
+        let ta = Instant::now();
+        if let Err(e) = model.forces(comm, &state.u, t1, &mut fi, &mut fe) {
+            tot.seconds_assembly += ta.elapsed().as_secs_f64();
+            tot.failure = Some(format!("step {} (t = {t1}): {}", step + 1, e.message));
+            return Ok(tot);
+        }
+        tot.seconds_assembly += ta.elapsed().as_secs_f64();
+        tot.residual_evaluations += 1;
+        for i in 0..n {
+            if !is_c[i] {
+                state.a[i] = (fe[i] - fi[i]) / m[i];
+                state.v[i] += 0.5 * h * state.a[i];
+            }
+        }
+        for &(d, _, gd, gdd) in &motion {
+            state.a[d] = gdd;
+            state.v[d] = gd;
+        }
+        model.commit();
+        let (react, g) = support_forces(comm, model, &mass, &state.a, &fi, &fe);
+        let mv = momentum(comm, model, &mass, &state.v);
+        let en = energy.step(comm, &du, &fi, &g, &state.v, &mv);
+        step += 1;
+        tot.steps += 1;
+        let rec = StepRecord {
+            step,
+            time: t1,
+            stats: stats(1),
+            retries: 0,
+            reactions: model.reactions(comm, &react),
+            wall_seconds: t0.elapsed().as_secs_f64(),
+            displacements: model.mean_displacements(comm, &state.u, &disp_sets),
+            energies: Some(en),
+        };
+        on_step(&rec, state, model)?;
+        t = t1;
+        t0 = Instant::now();
+    }
+    tot.converged = true;
+    Ok(tot)
+}

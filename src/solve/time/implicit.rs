@@ -1,0 +1,310 @@
+//! Implicit dynamics: every step solves the force-averaged generalized-α equation
+//! ([`super::alpha`]) for u_{n+1} with the chosen nonlinear solver (Newton, BFGS or
+//! JFNK: the step is a [`NonlinearProblem`]). The residual is divided by (1 − α_f) so
+//! that its Jacobian is K + c_M/(1−α_f) M and the model's stiffness assembly is used
+//! unchanged. Prescribed dofs take u(t_{n+1}) from their constraints; their velocity
+//! and acceleration follow from the Newmark relations like every other dof's.
+//!
+//! A step that does not converge is retried from the last converged state with half
+//! the time step, and the step grows back by 1.5 (up to `max_step`) after easy steps,
+//! as in static stepping ([`StepControl`]).
+
+// Index loops over several dof vectors at once read like the formulas.
+#![allow(clippy::needless_range_loop)]
+
+use super::alpha::AlphaParams;
+use super::energy::EnergyAccount;
+use super::{momentum, prescribed_motion, support_forces, DynObserver, DynState};
+use crate::model::dynamics::MassMatrix;
+use crate::model::Model;
+use crate::parallel::Comm;
+use crate::scene::deck::{MassKind, SchemeKind};
+use crate::solve::linear::lagged::LaggedBlockJacobi;
+use crate::solve::linear::matrix::DistMatrix;
+use crate::solve::nonlinear::{solve, NonlinearOptions, NonlinearProblem, SolveStats};
+use crate::solve::stepping::{RunTotals, StepControl, StepRecord};
+use crate::{Error, Result};
+use std::time::Instant;
+
+/// The scheme's parameters from the deck (default generalized-α with ρ∞ = 0.9).
+pub fn params_from_deck(a: &crate::scene::deck::AnalysisDeck) -> AlphaParams {
+    let rho = a.rho_inf.unwrap_or(0.9);
+    match a.scheme.unwrap_or(SchemeKind::GeneralizedAlpha) {
+        SchemeKind::Newmark => AlphaParams::newmark(),
+        SchemeKind::GeneralizedAlpha => AlphaParams::generalized_alpha(rho),
+        SchemeKind::HhtAlpha => AlphaParams::hht(rho),
+    }
+}
+
+/// One implicit step as a nonlinear problem in u_{n+1}.
+struct StepProblem<'a> {
+    model: &'a mut Model,
+    mass: &'a MassMatrix,
+    p: AlphaParams,
+    dt: f64,
+    t1: f64,
+    old: &'a DynState,
+    /// R(u_n, t_n) = f_int − f_ext of the last converged state.
+    r_old: &'a [f64],
+    am: Vec<f64>,
+    ma: Vec<f64>,
+    fi: Vec<f64>,
+}
+
+impl NonlinearProblem for StepProblem<'_> {
+    fn residual(&mut self, comm: &dyn Comm, u: &[f64], r: &mut [f64]) -> Result<f64> {
+        let (p, dt, o) = (self.p, self.dt, self.old);
+        for i in 0..u.len() {
+            let a1 = p.acceleration(dt, u[i], o.u[i], o.v[i], o.a[i]);
+            self.am[i] = p.mid_acceleration(o.a[i], a1);
+        }
+        self.model
+            .apply_mass(comm, self.mass, &self.am, &mut self.ma);
+        let info = self.model.forces(comm, u, self.t1, &mut self.fi, r)?;
+        let c = 1.0 / (1.0 - p.alpha_f);
+        let w = p.alpha_f * c;
+        let mut s = [0.0, 0.0];
+        for i in 0..u.len() {
+            r[i] = c * self.ma[i] + self.fi[i] - r[i] + w * self.r_old[i];
+            s[0] += (c * self.ma[i]).powi(2);
+            s[1] += (w * self.r_old[i]).powi(2);
+        }
+        comm.allreduce_sum(&mut s);
+        Ok(info.f_ref.max(s[0].sqrt()).max(s[1].sqrt()))
+    }
+    fn jacobian(&mut self, comm: &dyn Comm, u: &[f64], k: &mut DistMatrix) -> Result<()> {
+        self.model.jacobian(comm, u, self.t1, k)?;
+        let c = self.p.c_m(self.dt) / (1.0 - self.p.alpha_f);
+        self.model.add_mass(comm, self.mass, c, k);
+        Ok(())
+    }
+}
+
+/// M a = rhs on the free dofs with the given accelerations on the prescribed ones.
+struct MassProblem<'a> {
+    model: &'a Model,
+    mass: &'a MassMatrix,
+    rhs: &'a [f64],
+}
+
+impl NonlinearProblem for MassProblem<'_> {
+    fn residual(&mut self, comm: &dyn Comm, a: &[f64], r: &mut [f64]) -> Result<f64> {
+        self.model.apply_mass(comm, self.mass, a, r);
+        let mut s = [0.0, 0.0];
+        for i in 0..a.len() {
+            s[0] += r[i] * r[i];
+            s[1] += self.rhs[i] * self.rhs[i];
+            r[i] -= self.rhs[i];
+        }
+        comm.allreduce_sum(&mut s);
+        Ok(s[0].sqrt().max(s[1].sqrt()))
+    }
+    fn jacobian(&mut self, comm: &dyn Comm, _a: &[f64], k: &mut DistMatrix) -> Result<()> {
+        k.zero();
+        self.model.add_mass(comm, self.mass, 1.0, k);
+        Ok(())
+    }
+}
+
+/// The mass operator a deck asks for.
+pub fn mass_from_deck(comm: &dyn Comm, model: &Model) -> MassMatrix {
+    match model
+        .local
+        .settings
+        .analysis
+        .mass
+        .unwrap_or(MassKind::Consistent)
+    {
+        MassKind::Consistent => MassMatrix::Consistent,
+        MassKind::Lumped => MassMatrix::Lumped(model.lumped_mass(comm)),
+    }
+}
+
+fn add_stats(tot: &mut RunTotals, s: &SolveStats) {
+    tot.nonlinear_iterations += s.iterations;
+    tot.linear_iterations += s.linear_iterations;
+    tot.residual_evaluations += s.residual_evaluations;
+    tot.factorizations += s.factorizations;
+    tot.seconds_assembly += s.seconds_assembly;
+    tot.seconds_linear += s.seconds_linear;
+}
+
+/// Run implicit dynamics from rest (plus the deck's initial velocities); `on_step`
+/// sees the initial state (step 0) and every converged step.
+pub fn run_implicit(
+    comm: &dyn Comm,
+    model: &mut Model,
+    state: &mut DynState,
+    opts: &NonlinearOptions,
+    on_step: &mut DynObserver,
+) -> Result<RunTotals> {
+    let a = model.local.settings.analysis.clone();
+    let p = params_from_deck(&a);
+    let ctl = StepControl::from_analysis(&a, opts.max_iterations);
+    let disp_sets = model.local.settings.output.displacements.clone();
+    let mass = mass_from_deck(comm, model);
+    let n = model.n_owned_dofs();
+    let mut k = model.new_matrix(comm);
+    let mut pc = LaggedBlockJacobi::new(opts.pc_lag);
+    let mut tot = RunTotals::default();
+    let t_start = Instant::now();
+
+    // Initial state: u = g(0) on prescribed dofs, v from the deck (ġ(0) on prescribed
+    // dofs), a from M a = f_ext − f_int on the free dofs (g̈(0) on prescribed ones).
+    let h = 1e-6 * ctl.step;
+    let motion = prescribed_motion(model, 0.0, h);
+    state.u = vec![0.0; n];
+    state.v = model.initial_velocity();
+    for &(d, g, gd, _) in &motion {
+        state.u[d] = g;
+        state.v[d] = gd;
+    }
+    let mut fi = vec![0.0; n];
+    let mut fe = vec![0.0; n];
+    model.forces(comm, &state.u, 0.0, &mut fi, &mut fe)?;
+    let rhs: Vec<f64> = (0..n).map(|i| fe[i] - fi[i]).collect();
+    state.a = vec![0.0; n];
+    let a_pres: Vec<(usize, f64)> = motion.iter().map(|m| (m.0, m.3)).collect();
+    let mut r = vec![0.0; n];
+    let st0 = {
+        let mut prob = MassProblem {
+            model,
+            mass: &mass,
+            rhs: &rhs,
+        };
+        solve(
+            comm,
+            &mut prob,
+            &mut state.a,
+            &mut r,
+            &a_pres,
+            &mut k,
+            &mut pc,
+            opts,
+        )?
+    };
+    add_stats(&mut tot, &st0);
+    pc.invalidate();
+    if !st0.converged {
+        return Err(Error::runtime(format!(
+            "initial acceleration M a₀ = f_ext − f_int did not converge: {}",
+            st0.reason
+        )));
+    }
+    let (react, g) = support_forces(comm, model, &mass, &state.a, &fi, &fe);
+    let mv = momentum(comm, model, &mass, &state.v);
+    let ke0 = 0.5 * comm.dot(&state.v, &mv);
+    let mut energy = EnergyAccount::new(fi.clone(), g, ke0);
+    let mut r_old: Vec<f64> = (0..n).map(|i| fi[i] - fe[i]).collect();
+    on_step(
+        &StepRecord {
+            step: 0,
+            time: 0.0,
+            stats: st0,
+            retries: 0,
+            reactions: model.reactions(comm, &react),
+            wall_seconds: t_start.elapsed().as_secs_f64(),
+            displacements: model.mean_displacements(comm, &state.u, &disp_sets),
+            energies: Some(energy.current),
+        },
+        state,
+        model,
+    )?;
+
+    let end = a.end_time;
+    let mut t_done = 0.0;
+    let mut dt = ctl.step.min(ctl.max_step);
+    let mut step = 0;
+    let mut retries = 0;
+    let mut t0 = Instant::now();
+    let mut trial = vec![0.0; n];
+    while t_done < end * (1.0 - 1e-12) {
+        let mut t1 = t_done + dt;
+        if t1 > end * (1.0 - 1e-9) || end - t1 < 1e-3 * dt {
+            t1 = end;
+        }
+        let h = t1 - t_done;
+        let g1 = model.prescribed(t1);
+        for i in 0..n {
+            trial[i] = p.predict(h, state.u[i], state.v[i], state.a[i]);
+        }
+        let stats = {
+            let mut prob = StepProblem {
+                model,
+                mass: &mass,
+                p,
+                dt: h,
+                t1,
+                old: state,
+                r_old: &r_old,
+                am: vec![0.0; n],
+                ma: vec![0.0; n],
+                fi: vec![0.0; n],
+            };
+            solve(
+                comm, &mut prob, &mut trial, &mut r, &g1, &mut k, &mut pc, opts,
+            )?
+        };
+        add_stats(&mut tot, &stats);
+        if !stats.converged {
+            dt = 0.5 * h;
+            pc.invalidate();
+            if dt < ctl.min_step {
+                tot.failure = Some(format!(
+                    "step {} (t = {t1}) did not converge: {}; the time step was cut {retries} time(s) to {h:.3e}, the minimum is {:.3e}",
+                    step + 1,
+                    stats.reason,
+                    ctl.min_step
+                ));
+                return Ok(tot);
+            }
+            retries += 1;
+            tot.retries += 1;
+            continue;
+        }
+        // Accept: the state at t_{n+1}, its forces (one more evaluation, which also
+        // leaves the material history at u_{n+1} for the commit), energies.
+        let mut a1 = vec![0.0; n];
+        let mut v1 = vec![0.0; n];
+        let mut du = vec![0.0; n];
+        for i in 0..n {
+            a1[i] = p.acceleration(h, trial[i], state.u[i], state.v[i], state.a[i]);
+            v1[i] = p.velocity(h, state.v[i], state.a[i], a1[i]);
+            du[i] = trial[i] - state.u[i];
+        }
+        model.forces(comm, &trial, t1, &mut fi, &mut fe)?;
+        tot.residual_evaluations += 1;
+        model.commit();
+        let (react, g) = support_forces(comm, model, &mass, &a1, &fi, &fe);
+        let mv = momentum(comm, model, &mass, &v1);
+        let en = energy.step(comm, &du, &fi, &g, &v1, &mv);
+        for i in 0..n {
+            r_old[i] = fi[i] - fe[i];
+        }
+        state.u.copy_from_slice(&trial);
+        state.v = v1;
+        state.a = a1;
+        step += 1;
+        tot.steps += 1;
+        let easy = stats.iterations <= ctl.easy_iterations;
+        let rec = StepRecord {
+            step,
+            time: t1,
+            reactions: model.reactions(comm, &react),
+            stats,
+            retries,
+            wall_seconds: t0.elapsed().as_secs_f64(),
+            displacements: model.mean_displacements(comm, &state.u, &disp_sets),
+            energies: Some(en),
+        };
+        on_step(&rec, state, model)?;
+        if easy && retries == 0 {
+            dt = (dt * ctl.growth).min(ctl.max_step);
+        }
+        t_done = t1;
+        retries = 0;
+        t0 = Instant::now();
+    }
+    tot.converged = true;
+    Ok(tot)
+}
