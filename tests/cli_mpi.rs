@@ -296,6 +296,31 @@ fn prescribed_stretch_same_on_one_and_two_ranks() {
     assert_same_runs(&dir.join("r1"), &dir.join("r2"), "cube-stretch");
 }
 
+/// J2 plasticity to large strain (F-bar, history, step cuts) is rank-independent.
+#[test]
+fn plastic_bar_same_on_one_and_two_ranks() {
+    let dir = temp_dir("rank-plastic");
+    ok(alfe(
+        &dir,
+        1,
+        &["run", "plastic-bar", "--out", "r1", "--quiet"],
+    ));
+    ok(alfe(
+        &dir,
+        2,
+        &[
+            "run",
+            "plastic-bar",
+            "--out",
+            "r2",
+            "--partitions",
+            "parts",
+            "--quiet",
+        ],
+    ));
+    assert_same_runs(&dir.join("r1"), &dir.join("r2"), "plastic-bar");
+}
+
 #[test]
 fn tet_patch_same_on_one_and_two_ranks() {
     let dir = temp_dir("rank-tet");

@@ -179,3 +179,78 @@ fn plastic_bar_reaches_large_plastic_strain() {
     // carry more), and well above the initial yield force.
     assert!(f1 > 250.0 * 100.0, "{f1}");
 }
+
+/// Material decks: a missing, misplaced or invalid parameter is an input error that
+/// names the field.
+#[test]
+fn bad_material_decks_name_the_field() {
+    let cases: &[(&str, &str)] = &[
+        ("model = \"mooney-rivlin\"\nC01 = 0.1\nnu = 0.49", "materials[0].C10"),
+        ("model = \"mooney-rivlin\"\nE = 3.0\nC10 = 0.5\nnu = 0.49", "materials[0].E"),
+        ("model = \"neo-hookean\"\nE = 3.0\nC10 = 0.5\nnu = 0.3", "materials[0].C10"),
+        ("model = \"j2\"\nE = 210000.0\nnu = 0.3", "materials[0].yield_stress"),
+        (
+            "model = \"j2\"\nE = 210000.0\nnu = 0.3\nyield_stress = 250.0\nhardening = { type = \"table\", points = [[0.0, 250.0], [0.1, 240.0]] }",
+            "materials[0].hardening",
+        ),
+        (
+            "model = \"j2\"\nE = 210000.0\nnu = 0.3\nyield_stress = 250.0\nhardening = { type = \"table\", points = [[0.0, 300.0], [0.1, 340.0]] }",
+            "materials[0].hardening",
+        ),
+        (
+            "model = \"j2\"\nE = 210000.0\nnu = 0.3\nyield_stress = 250.0\nhardening = { type = \"table\", curve = \"nope\" }",
+            "materials[0].hardening.curve",
+        ),
+        (
+            "model = \"j2\"\nE = 210000.0\nnu = 0.3\nyield_stress = 250.0\nhardening = { type = \"power\", k = 500.0, n = 1.5 }",
+            "materials[0].hardening",
+        ),
+        ("model = \"mooney-rivlin\"\nC10 = 0.5\nnu = 0.5", "materials[0].nu"),
+    ];
+    for (mat, field) in cases {
+        let text = cube_deck(
+            &format!("[[materials]]\nname = \"rubber\"\n{mat}\n"),
+            0.1,
+            1,
+        );
+        match try_run_deck("bad-material", &text) {
+            Err(e) => {
+                assert_eq!(e.kind, alfe::ErrorKind::Input, "{mat}: {e}");
+                assert!(
+                    e.message.contains(field),
+                    "{mat}: `{e}` should name {field}"
+                );
+            }
+            Ok(_) => panic!("{mat}: accepted"),
+        }
+    }
+    // A tabulated curve through [[curves]] is accepted and gives the same answer as the
+    // same points inline.
+    let inline = "model = \"j2\"\nE = 210000.0\nnu = 0.3\nyield_stress = 250.0\nhardening = { type = \"table\", points = [[0.0, 250.0], [0.5, 750.0]] }";
+    let named = "model = \"j2\"\nE = 210000.0\nnu = 0.3\nyield_stress = 250.0\nhardening = { type = \"table\", curve = \"steel\" }";
+    let a = run_deck(
+        "table-inline",
+        &cube_deck(
+            &format!("[[materials]]\nname = \"rubber\"\n{inline}\n"),
+            0.2,
+            4,
+        ),
+    );
+    let text = cube_deck(
+        &format!("[[materials]]\nname = \"rubber\"\n{named}\n"),
+        0.2,
+        4,
+    );
+    let text =
+        format!("{text}\n[[curves]]\nname = \"steel\"\npoints = [[0.0, 250.0], [0.5, 750.0]]\n");
+    let b = run_deck("table-curve", &text);
+    let (fa, fb) = (
+        a.steps.last().unwrap().reactions[0][0],
+        b.steps.last().unwrap().reactions[0][0],
+    );
+    assert!(rel_err(fa, fb) < 1e-12, "{fa} vs {fb}");
+    // Slope 1000 over ε̄p: the same as linear hardening with H = 1000.
+    let l: f64 = 1.2;
+    let tau = (250.0 + 1000.0 * l.ln()) / (1.0 + 1000.0 / 210000.0);
+    assert!(rel_err(-fa, tau / l) < 1e-7, "{fa} vs {}", tau / l);
+}
