@@ -306,8 +306,10 @@ pub fn run(comm: &dyn Comm, opts: &RunOptions) -> Result<RunOutcome> {
             }
             Ok(())
         };
-        let t = match explicit_dt {
-            Some((dt, _)) => run_explicit(comm, &mut model, &mut state, dt, &mut observe)?,
+        let t = match &explicit_dt {
+            Some((dt, stable)) => {
+                run_explicit(comm, &mut model, &mut state, *dt, stable, &mut observe)?
+            }
             None => run_implicit(comm, &mut model, &mut state, &nopts, &mut observe)?,
         };
         u = state.u;
@@ -371,9 +373,10 @@ pub fn run(comm: &dyn Comm, opts: &RunOptions) -> Result<RunOutcome> {
         }
         .into(),
         time_step: explicit_dt
-            .map(|(dt, _)| dt)
+            .as_ref()
+            .map(|(dt, _)| *dt)
             .unwrap_or(model.local.settings.analysis.step),
-        stable_time_step: explicit_dt.map(|(_, s)| s.dt),
+        stable_time_step: explicit_dt.as_ref().map(|(_, s)| s.dt),
         steps: totals.steps,
         converged: totals.converged,
         nonlinear_iterations: totals.nonlinear_iterations,

@@ -203,6 +203,33 @@ pub fn char_length(kind: ElemKind, x0: &[[f64; 3]]) -> f64 {
     element_volume(kind, x0).abs().cbrt()
 }
 
+/// The element's thickness in its thinnest direction: volume / largest face area (faces
+/// of a hex8 by half the cross product of their diagonals). Its ratio between the
+/// current and the reference configuration scales the explicit stable step as the
+/// element is squashed. `None` for an inverted or degenerate configuration.
+pub fn thickness(kind: ElemKind, x: &[[f64; 3]]) -> Option<f64> {
+    let v = element_volume(kind, x);
+    let sub = |a: [f64; 3], b: [f64; 3]| [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
+    let cross_norm = |a: [f64; 3], b: [f64; 3]| {
+        let c = [
+            a[1] * b[2] - a[2] * b[1],
+            a[2] * b[0] - a[0] * b[2],
+            a[0] * b[1] - a[1] * b[0],
+        ];
+        (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt()
+    };
+    let amax = kind
+        .faces()
+        .iter()
+        .map(|f| match f.len() {
+            4 => 0.5 * cross_norm(sub(x[f[2]], x[f[0]]), sub(x[f[3]], x[f[1]])),
+            _ => 0.5 * cross_norm(sub(x[f[1]], x[f[0]]), sub(x[f[2]], x[f[0]])),
+        })
+        .fold(0.0, f64::max);
+    let t = v / amax;
+    (t.is_finite() && t > 0.0).then_some(t)
+}
+
 /// von Mises equivalent stress √(3/2 s:s) of a Voigt stress (s the deviator).
 pub fn von_mises(s: &[f64; 6]) -> f64 {
     let (a, b, c) = (s[0] - s[1], s[1] - s[2], s[2] - s[0]);

@@ -6,8 +6,9 @@
 //!
 //! One residual evaluation (collective: the halo sum of the element forces) per step.
 //! Prescribed dofs follow their constraint: u = g(t), with ġ and g̈ by central
-//! differences. Δt = dt_factor × min_e L_e / c_d ([`Model::stable_time_step`]), or the
-//! deck's fixed `step` if it is not above the stable step.
+//! differences. Δt = dt_factor × the current stable step, recomputed every step as the
+//! elements deform ([`Model::current_stable_time_step`]), or the deck's fixed `step`
+//! while it is not above the stable step (the run ends cleanly when it becomes so).
 
 // Index loops over several dof vectors at once read like the formulas.
 #![allow(clippy::needless_range_loop)]
@@ -43,14 +44,24 @@ pub fn explicit_time_step(comm: &dyn Comm, model: &Model) -> Result<(f64, Stable
     }
 }
 
-/// Run the explicit analysis; `on_step` sees the initial state (step 0) and every step.
+/// Run the explicit analysis from step `dt` (from [`explicit_time_step`]); `on_step` sees
+/// the initial state (step 0) and every step.
 pub fn run_explicit(
     comm: &dyn Comm,
     model: &mut Model,
     state: &mut DynState,
     dt: f64,
+    stable: &StableStep,
     on_step: &mut DynObserver,
 ) -> Result<RunTotals> {
+    let fixed = model.local.settings.analysis.step > 0.0;
+    let factor = model
+        .local
+        .settings
+        .analysis
+        .dt_factor
+        .unwrap_or(DEFAULT_DT_FACTOR);
+    let mut dt = dt;
     let end = model.local.settings.analysis.end_time;
     let disp_sets = model.local.settings.output.displacements.clone();
     let m = model.lumped_mass(comm);
@@ -113,6 +124,25 @@ pub fn run_explicit(
     let mut du = vec![0.0; n];
     t0 = Instant::now();
     while t < end * (1.0 - 1e-12) {
+        if step > 0 {
+            let now = model.current_stable_time_step(comm, &state.u, stable);
+            if !fixed {
+                dt = factor * now;
+            } else if dt > now {
+                tot.failure = Some(format!(
+                    "step {} (t = {t}): the fixed analysis.step {dt:.4e} is above the stable step {now:.4e} of the deformed mesh",
+                    step + 1
+                ));
+                return Ok(tot);
+            }
+            if dt.is_nan() || dt <= 1e-12 * end {
+                tot.failure = Some(format!(
+                    "step {} (t = {t}): the stable step collapsed to {dt:.3e} (an element is squashed flat)",
+                    step + 1
+                ));
+                return Ok(tot);
+            }
+        }
         let mut t1 = t + dt;
         if t1 > end * (1.0 - 1e-9) || end - t1 < 1e-3 * dt {
             t1 = end;
