@@ -23,6 +23,16 @@ const CASES: &[(&str, &str, &str)] = &[
         "standard",
     ),
     (
+        "neo-hookean, F-bar",
+        "model = \"neo-hookean\"\nE = 210000.0\nnu = 0.3",
+        "fbar",
+    ),
+    (
+        "mooney-rivlin, standard",
+        "model = \"mooney-rivlin\"\nC10 = 0.5508\nC01 = 0.1377\nnu = 0.4995",
+        "standard",
+    ),
+    (
         "mooney-rivlin, F-bar",
         "model = \"mooney-rivlin\"\nC10 = 0.5508\nC01 = 0.1377\nnu = 0.4995",
         "fbar",

@@ -595,19 +595,29 @@ fn gauss_loop<const N: usize, const G: usize>(
     let finite = kin == Kinematics::Finite;
     let (pts, gbar) = element_kinematics(tab, fbar, kin, x0, u)?;
     f.fill(0.0);
+    let merr = |g: usize, e: crate::material::MaterialError| {
+        ElementError(format!("material at Gauss point {g}: {}", e.0))
+    };
     for (g, p) in pts.iter().enumerate() {
-        let sp = mat
-            .evaluate(
-                &p.f,
-                &state_old[g * ns..(g + 1) * ns],
-                &mut state_new[g * ns..(g + 1) * ns],
-            )
-            .map_err(|e| ElementError(format!("material at Gauss point {g}: {}", e.0)))?;
-        add_force(&p.grad, &sp.stress, p.w, f);
-        if let Some(k) = k.as_deref_mut() {
-            add_tangent(&p.grad, &sp, finite, p.w, k);
-            if let Some(gb) = &gbar {
-                add_fbar_tangent(&p.grad, gb, &sp, finite, p.w, k);
+        let (old, new) = (
+            &state_old[g * ns..(g + 1) * ns],
+            &mut state_new[g * ns..(g + 1) * ns],
+        );
+        match k.as_deref_mut() {
+            Some(k) => {
+                let sp = mat.evaluate(&p.f, old, new).map_err(|e| merr(g, e))?;
+                add_force(&p.grad, &sp.stress, p.w, f);
+                add_tangent(&p.grad, &sp, finite, p.w, k);
+                if let Some(gb) = &gbar {
+                    add_fbar_tangent(&p.grad, gb, &sp, finite, p.w, k);
+                }
+            }
+            // A residual needs no tangent: the cheaper stress-only path.
+            None => {
+                let s = mat
+                    .evaluate_stress(&p.f, old, new)
+                    .map_err(|e| merr(g, e))?;
+                add_force(&p.grad, &s, p.w, f);
             }
         }
     }
@@ -642,10 +652,10 @@ fn stress_kernel<const N: usize, const G: usize>(
     let (pts, _) = element_kinematics(tab, fbar, kin, x0, u)?;
     let (mut sum, mut vol) = ([0.0; 6], 0.0);
     for (g, p) in pts.iter().enumerate() {
-        let sp = mat
-            .evaluate(&p.f, &state_old[g * ns..(g + 1) * ns], scratch)
+        let stress = mat
+            .evaluate_stress(&p.f, &state_old[g * ns..(g + 1) * ns], scratch)
             .map_err(|e| ElementError(format!("material at Gauss point {g}: {}", e.0)))?;
-        for (s, t) in sum.iter_mut().zip(&sp.stress) {
+        for (s, t) in sum.iter_mut().zip(&stress) {
             *s += p.w * t;
         }
         // Kirchhoff τ integrated over dV, divided by v = ∫ J dV, is the mean of σ over dv

@@ -112,20 +112,14 @@ fn theta(y: f64) -> f64 {
     }
 }
 
-impl Material for J2Plasticity {
-    fn kinematics(&self) -> Kinematics {
-        Kinematics::Finite
-    }
-
-    fn n_state(&self) -> usize {
-        J2_N_STATE
-    }
-
-    fn evaluate(
+impl J2Plasticity {
+    /// Return mapping, history update, τ and, if `want_tangent`, c (zero otherwise).
+    fn update(
         &self,
         f: &Matrix3<f64>,
         state_old: &[f64],
         state_new: &mut [f64],
+        want_tangent: bool,
     ) -> Result<StressPoint, MaterialError> {
         check_f("J2", f)?;
         if state_old.len() < J2_N_STATE || state_new.len() < J2_N_STATE {
@@ -193,6 +187,17 @@ impl Material for J2Plasticity {
             state_new[..J2_N_STATE].copy_from_slice(old);
         }
 
+        if !want_tangent {
+            let stress = to_voigt(&tau);
+            if stress.iter().any(|x| !x.is_finite()) {
+                return Err(MaterialError("J2: non-finite stress".into()));
+            }
+            return Ok(StressPoint {
+                stress,
+                tangent: [[0.0; 6]; 6],
+            });
+        }
+
         // Tangent in the eigenbasis of the trial bₑ, then rotated.
         let mut c: T4 = [[[[0.0; 3]; 3]; 3]; 3];
         for i in 0..3 {
@@ -222,6 +227,34 @@ impl Material for J2Plasticity {
             return Err(MaterialError("J2: non-finite stress or tangent".into()));
         }
         Ok(StressPoint { stress, tangent })
+    }
+}
+
+impl Material for J2Plasticity {
+    fn kinematics(&self) -> Kinematics {
+        Kinematics::Finite
+    }
+
+    fn n_state(&self) -> usize {
+        J2_N_STATE
+    }
+
+    fn evaluate(
+        &self,
+        f: &Matrix3<f64>,
+        state_old: &[f64],
+        state_new: &mut [f64],
+    ) -> Result<StressPoint, MaterialError> {
+        self.update(f, state_old, state_new, true)
+    }
+
+    fn evaluate_stress(
+        &self,
+        f: &Matrix3<f64>,
+        state_old: &[f64],
+        state_new: &mut [f64],
+    ) -> Result<[f64; 6], MaterialError> {
+        Ok(self.update(f, state_old, state_new, false)?.stress)
     }
 
     fn equivalent_plastic_strain(&self, state: &[f64]) -> Option<f64> {

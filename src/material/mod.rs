@@ -61,6 +61,16 @@ pub trait Material: Send + Sync + std::fmt::Debug {
         state_old: &[f64],
         state_new: &mut [f64],
     ) -> Result<StressPoint, MaterialError>;
+    /// The stress alone (same history update as [`Material::evaluate`]): what a residual
+    /// evaluation needs. Models whose tangent is costly override it.
+    fn evaluate_stress(
+        &self,
+        f: &Matrix3<f64>,
+        state_old: &[f64],
+        state_new: &mut [f64],
+    ) -> Result<[f64; 6], MaterialError> {
+        Ok(self.evaluate(f, state_old, state_new)?.stress)
+    }
     /// Small-strain shear modulus: scales penalty and ALM stiffnesses.
     fn shear_modulus(&self) -> f64;
     /// Small-strain bulk modulus.
@@ -79,4 +89,49 @@ pub fn lame(e: f64, nu: f64) -> (f64, f64) {
     let mu = e / (2.0 * (1.0 + nu));
     let lambda = e * nu / ((1.0 + nu) * (1.0 - 2.0 * nu));
     (lambda, mu)
+}
+
+#[cfg(test)]
+mod stress_only_tests {
+    use super::*;
+    use nalgebra::Matrix3;
+
+    /// `evaluate_stress` gives exactly `evaluate`'s stress and history, elastic and
+    /// plastic, for every model.
+    #[test]
+    fn stress_only_path_matches_evaluate() {
+        let models: Vec<Box<dyn Material>> = vec![
+            Box::new(LinearElastic::new(10.0, 0.3, 1.0)),
+            Box::new(NeoHookean::new(10.0, 0.3, 1.0)),
+            Box::new(MooneyRivlin::new(0.55, 0.14, 0.4995, 1.0)),
+            Box::new(J2Plasticity::new(
+                210000.0,
+                0.3,
+                Hardening::Linear {
+                    sigma_y0: 250.0,
+                    h: 1000.0,
+                },
+                1.0,
+            )),
+        ];
+        let f = Matrix3::new(1.1, 0.05, 0.0, -0.02, 0.97, 0.01, 0.03, 0.0, 0.95);
+        for m in &models {
+            let old = vec![0.0; m.n_state()];
+            let (mut a, mut b) = (vec![0.0; m.n_state()], vec![0.0; m.n_state()]);
+            let full = m.evaluate(&f, &old, &mut a).unwrap();
+            let s = m.evaluate_stress(&f, &old, &mut b).unwrap();
+            assert_eq!(full.stress, s, "{m:?}");
+            assert_eq!(a, b, "{m:?}");
+            if m.n_state() > 0 {
+                // Plastic from a committed plastic state too.
+                let f2 = f * Matrix3::new(1.05, 0.0, 0.02, 0.0, 1.0, 0.0, 0.0, 0.01, 0.98);
+                let (mut c, mut d) = (vec![0.0; m.n_state()], vec![0.0; m.n_state()]);
+                let full = m.evaluate(&f2, &a, &mut c).unwrap();
+                let s = m.evaluate_stress(&f2, &a, &mut d).unwrap();
+                assert_eq!(full.stress, s);
+                assert_eq!(c, d);
+                assert!(m.equivalent_plastic_strain(&c).unwrap() > 0.0);
+            }
+        }
+    }
 }

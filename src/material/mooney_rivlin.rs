@@ -50,17 +50,9 @@ impl MooneyRivlin {
     }
 }
 
-impl Material for MooneyRivlin {
-    fn kinematics(&self) -> Kinematics {
-        Kinematics::Finite
-    }
-
-    fn evaluate(
-        &self,
-        f: &Matrix3<f64>,
-        _state_old: &[f64],
-        _state_new: &mut [f64],
-    ) -> Result<StressPoint, MaterialError> {
+impl MooneyRivlin {
+    /// τ and, if `want_tangent`, c (zero otherwise).
+    fn update(&self, f: &Matrix3<f64>, want_tangent: bool) -> Result<StressPoint, MaterialError> {
         let j = check_f("Mooney-Rivlin", f)?;
         let (c10, c01, kb) = (self.c10, self.c01, self.k());
         let id = Matrix3::<f64>::identity();
@@ -74,6 +66,16 @@ impl Material for MooneyRivlin {
         let p = kb * (j - 1.0);
         let tau = tiso + id * (j * p);
         debug_assert!((tr_tbar - 2.0 * (c10 * i1 + 2.0 * c01 * i2)).abs() <= 1e-9 * tr_tbar.abs());
+        if !want_tangent {
+            let stress = to_voigt(&tau);
+            if stress.iter().any(|x| !x.is_finite()) {
+                return Err(MaterialError("Mooney-Rivlin: non-finite stress".into()));
+            }
+            return Ok(StressPoint {
+                stress,
+                tangent: [[0.0; 6]; 6],
+            });
+        }
 
         let ii = outer(&id, &id);
         let sym_i = sym_box(&id, &id);
@@ -108,6 +110,30 @@ impl Material for MooneyRivlin {
             ));
         }
         Ok(StressPoint { stress, tangent })
+    }
+}
+
+impl Material for MooneyRivlin {
+    fn kinematics(&self) -> Kinematics {
+        Kinematics::Finite
+    }
+
+    fn evaluate(
+        &self,
+        f: &Matrix3<f64>,
+        _state_old: &[f64],
+        _state_new: &mut [f64],
+    ) -> Result<StressPoint, MaterialError> {
+        self.update(f, true)
+    }
+
+    fn evaluate_stress(
+        &self,
+        f: &Matrix3<f64>,
+        _state_old: &[f64],
+        _state_new: &mut [f64],
+    ) -> Result<[f64; 6], MaterialError> {
+        Ok(self.update(f, false)?.stress)
     }
 
     fn shear_modulus(&self) -> f64 {
