@@ -112,6 +112,10 @@ fn theta(y: f64) -> f64 {
     }
 }
 
+/// Relative distance below the yield stress within which a previously plastic point
+/// counts as on the surface for its tangent.
+const ON_SURFACE: f64 = 1e-6;
+
 impl J2Plasticity {
     /// Return mapping, history update, τ and, if `want_tangent`, c (zero otherwise).
     fn update(
@@ -167,6 +171,14 @@ impl J2Plasticity {
             let beta = 1.0 - 3.0 * g * dg / q_tr;
             let coef = 6.0 * g * g * (dg / q_tr - 1.0 / (3.0 * g + h));
             (dg, beta, coef, s_tr / s_norm)
+        } else if ep_n > 0.0 && q_tr >= sy_n * (1.0 - ON_SURFACE) {
+            // At a converged plastic state (the first iteration of the next step starts
+            // there): the stress is the trial one, but continued loading is plastic, so
+            // the tangent is the elastoplastic one at Δγ = 0 (the continuum tangent)
+            // rather than the elastic one, which would overshoot the first correction.
+            let (_, h) = self.hardening.yield_stress(ep_n);
+            let coef = -6.0 * g * g / (3.0 * g + h);
+            (0.0, 1.0, coef, s_tr / s_norm)
         } else {
             (0.0, 1.0, 0.0, Vector3::zeros())
         };
@@ -284,6 +296,41 @@ mod tests {
     const NU: f64 = 0.3;
     const SY0: f64 = 250.0;
     const H: f64 = 2000.0;
+
+    /// At a converged plastic state the tangent is the elastoplastic one (continued
+    /// loading is plastic): it matches a forward difference along the loading path,
+    /// and differs from the elastic tangent.
+    #[test]
+    fn tangent_at_a_converged_plastic_state_is_elastoplastic() {
+        let m = linear();
+        let f = diag(1.01, 0.996, 0.996);
+        let (_, state) = eval(&m, &f, &[0.0; J2_N_STATE]);
+        assert!(state[6] > 0.0);
+        let (sp, again) = eval(&m, &f, &state);
+        assert_eq!(&again[..], &state[..], "no new plastic flow at the same F");
+        // Forward difference along d = diag(1, −½, −½) (isochoric uniaxial loading).
+        let eps = 1e-7;
+        let d = diag(1.0, -0.5, -0.5);
+        let (sp2, _) = eval(&m, &((Matrix3::identity() + d * eps) * f), &state);
+        let t = |s: &[f64; 6]| Matrix3::new(s[0], s[3], s[5], s[3], s[1], s[4], s[5], s[4], s[2]);
+        let (t0, t1) = (t(&sp.stress), t(&sp2.stress));
+        let rate = (t1 - t0) / eps - (d * t0 + t0 * d);
+        // c:d with engineering Voigt columns (d has no shear).
+        let dv = [1.0, -0.5, -0.5];
+        let cd: Vec<f64> = (0..3)
+            .map(|r| (0..3).map(|c| sp.tangent[r][c] * dv[c]).sum())
+            .collect();
+        for r in 0..3 {
+            assert!(
+                (cd[r] - rate[(r, r)]).abs() < 1e-4 * E,
+                "row {r}: tangent {} vs forward difference {}",
+                cd[r],
+                rate[(r, r)]
+            );
+        }
+        // The elastic tangent's c_xxxx is about K + 4G/3; the elastoplastic one far less.
+        assert!((sp.tangent[0][0] - (m.k() + 4.0 / 3.0 * m.g())).abs() > 0.1 * E);
+    }
 
     fn linear() -> J2Plasticity {
         J2Plasticity::new(
