@@ -12,7 +12,7 @@
 /// k POWER_EP0^n (≈ 6.3e-2 k for n = 0.2, 1e-6 k for n = 1 where it is exact).
 pub const POWER_EP0: f64 = 1e-6;
 
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub enum Hardening {
     /// σ_y = σ_y0 + h ε̄_p. In uniaxial tension (log strain, Kirchhoff stress) the
     /// elastic-plastic slope is E h / (E + h): the axial stress equals σ_y(ε̄_p) and
