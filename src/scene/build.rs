@@ -65,7 +65,10 @@ pub fn build(deck: &Deck, deck_dir: &Path) -> Result<ModelDef> {
     // Materials.
     let mut materials = Vec::new();
     for (i, m) in deck.materials.iter().enumerate() {
-        materials.push((m.name.clone(), material_def(m, &format!("materials[{i}]"), deck)?));
+        materials.push((
+            m.name.clone(),
+            material_def(m, &format!("materials[{i}]"), deck)?,
+        ));
     }
 
     // Parts and their meshes.
@@ -760,15 +763,25 @@ fn material_def(m: &MaterialDeck, f: &str, deck: &Deck) -> Result<MaterialDef> {
         MaterialModel::MooneyRivlin => {
             unused("E", m.e.is_some())?;
             plastic_unused()?;
-            let c10 = m.c10.ok_or_else(|| err(format!("{f}.C10"), "model `mooney-rivlin` needs C10"))?;
+            let c10 = m
+                .c10
+                .ok_or_else(|| err(format!("{f}.C10"), "model `mooney-rivlin` needs C10"))?;
             let c01 = m.c01.unwrap_or(0.0);
-            if !(c10.is_finite() && c01.is_finite() && c10 + c01 > 0.0 && c10 >= 0.0 && c01 >= 0.0) {
+            if !(c10.is_finite() && c01.is_finite() && c10 + c01 > 0.0 && c10 >= 0.0 && c01 >= 0.0)
+            {
                 return Err(err(
                     format!("{f}.C10"),
-                    format!("expected C10 ≥ 0, C01 ≥ 0 and C10 + C01 > 0, got C10 = {c10}, C01 = {c01}"),
+                    format!(
+                        "expected C10 ≥ 0, C01 ≥ 0 and C10 + C01 > 0, got C10 = {c10}, C01 = {c01}"
+                    ),
                 ));
             }
-            MaterialDef::MooneyRivlin { c10, c01, nu, density }
+            MaterialDef::MooneyRivlin {
+                c10,
+                c01,
+                nu,
+                density,
+            }
         }
         MaterialModel::J2 => {
             let e = positive("E", m.e)?;
