@@ -107,3 +107,46 @@ impl LaggedPreconditioner {
         })
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::parallel::run_ranks;
+    use crate::solve::linear::block_jacobi::tests::elasticity_cube;
+
+    /// The lag applies to either kind; changing the kind refactors at once; `None`
+    /// drops the factorization.
+    #[test]
+    fn lag_and_kind_changes() {
+        run_ranks(2, |c| {
+            let m = elasticity_cube(c, 3, &[32, 32]);
+            let mut pc = LaggedPreconditioner::new(1);
+            assert!(pc.get().is_none());
+            assert_eq!(pc.update(c, &m, PcKind::Asm), Ok(true));
+            assert_eq!(pc.update(c, &m, PcKind::Asm), Ok(false));
+            assert_eq!(pc.update(c, &m, PcKind::Asm), Ok(true));
+            pc.invalidate();
+            assert_eq!(pc.update(c, &m, PcKind::Asm), Ok(true));
+            assert_eq!(pc.update(c, &m, PcKind::BlockJacobi), Ok(true));
+            assert_eq!(pc.update(c, &m, PcKind::BlockJacobi), Ok(false));
+            assert_eq!(pc.factorizations, 4);
+            // Block Jacobi and ASM differ on 2 ranks.
+            let n = m.n_owned_dofs();
+            let r: Vec<f64> = (0..n).map(|i| (i as f64).cos()).collect();
+            let (mut z_bj, mut z_asm) = (vec![0.0; n], vec![0.0; n]);
+            pc.get().unwrap().apply(c, &r, &mut z_bj);
+            assert_eq!(pc.update(c, &m, PcKind::Asm), Ok(true));
+            pc.get().unwrap().apply(c, &r, &mut z_asm);
+            let d = c.norm2(
+                &z_bj
+                    .iter()
+                    .zip(&z_asm)
+                    .map(|(a, b)| a - b)
+                    .collect::<Vec<_>>(),
+            );
+            assert!(d > 1e-6 * c.norm2(&z_bj));
+            assert_eq!(pc.update(c, &m, PcKind::None), Ok(false));
+            assert!(pc.get().is_none());
+        });
+    }
+}
