@@ -614,7 +614,7 @@ fn part_mesh(m: &MeshDeck, f: &str, part: u32, deck_dir: &Path) -> Result<Mesh> 
             for i in 0..4 {
                 let (a, b, c) = (corners[i], corners[(i + 1) % 4], corners[(i + 2) % 4]);
                 let cross = (b[0] - a[0]) * (c[1] - b[1]) - (b[1] - a[1]) * (c[0] - b[0]);
-                if !(cross > 0.0) {
+                if cross.is_nan() || cross <= 0.0 {
                     return Err(err(
                         format!("{f}.mesh.corners"),
                         "expected a convex quadrilateral, corners counter-clockwise",

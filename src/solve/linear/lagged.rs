@@ -10,8 +10,8 @@ use super::{PcKind, Preconditioner};
 use crate::parallel::Comm;
 
 enum Factored {
-    BlockJacobi(BlockJacobi),
-    Asm(RestrictedSchwarz),
+    BlockJacobi(Box<BlockJacobi>),
+    Asm(Box<RestrictedSchwarz>),
 }
 
 impl Factored {
@@ -71,9 +71,11 @@ impl LaggedPreconditioner {
             (Some(Factored::BlockJacobi(p)), _) => p.refactor(k),
             (Some(Factored::Asm(p)), _) => p.refactor(comm, k),
             (None, PcKind::Asm) => {
-                RestrictedSchwarz::new(comm, k).map(|p| self.pc = Some(Factored::Asm(p)))
+                RestrictedSchwarz::new(comm, k).map(|p| self.pc = Some(Factored::Asm(Box::new(p))))
             }
-            (None, _) => BlockJacobi::new(k).map(|p| self.pc = Some(Factored::BlockJacobi(p))),
+            (None, _) => {
+                BlockJacobi::new(k).map(|p| self.pc = Some(Factored::BlockJacobi(Box::new(p))))
+            }
         };
         let ok = comm.all_ok(res.is_ok());
         if !ok {
@@ -101,8 +103,8 @@ impl LaggedPreconditioner {
     pub fn get(&self) -> Option<&dyn Preconditioner> {
         self.pc.as_ref().map(|p| -> &dyn Preconditioner {
             match p {
-                Factored::BlockJacobi(b) => b,
-                Factored::Asm(a) => a,
+                Factored::BlockJacobi(b) => b.as_ref(),
+                Factored::Asm(a) => a.as_ref(),
             }
         })
     }

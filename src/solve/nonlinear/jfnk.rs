@@ -120,6 +120,7 @@ impl LinearOperator for FdJacobian<'_> {
 }
 
 /// Assemble and factor the preconditioning stiffness at `u` (collective).
+#[allow(clippy::too_many_arguments)]
 fn refresh_preconditioner(
     comm: &dyn Comm,
     problem: &mut dyn NonlinearProblem,
