@@ -8,6 +8,7 @@ use crate::parallel::Comm;
 use crate::partition::{cache, distribute, quality};
 use crate::scene::deck::{AnalysisKind, FdStepDeck, NonlinearKind, PreconditionerKind};
 use crate::solve::linear::gmres::GmresOptions;
+use crate::solve::linear::PcKind;
 use crate::solve::nonlinear::{FdRule, NonlinearOptions, SolverKind};
 use crate::solve::stepping::StepRecord;
 use crate::solve::stepping::{run_static, RunTotals};
@@ -148,7 +149,11 @@ pub fn solver_options(
             restart: s.linear.restart,
             max_iterations: s.linear.max_iterations,
         },
-        block_jacobi: s.linear.preconditioner == PreconditionerKind::BlockJacobi,
+        preconditioner: match s.linear.preconditioner {
+            PreconditionerKind::BlockJacobi => PcKind::BlockJacobi,
+            PreconditionerKind::Asm => PcKind::Asm,
+            PreconditionerKind::None => PcKind::None,
+        },
         pc_lag: s.linear.lag,
         bfgs_reform: s.bfgs_reform,
         fd_delta: s.fd_delta,

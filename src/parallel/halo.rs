@@ -47,6 +47,21 @@ impl HaloPlan {
         self.ghosts.len()
     }
 
+    /// Owned local offsets sent by [`Self::forward`], grouped by destination rank.
+    pub fn send_indices(&self) -> &[usize] {
+        &self.send_idx
+    }
+
+    /// How many entries [`Self::forward`] sends to each rank.
+    pub fn send_counts(&self) -> &[usize] {
+        &self.send_counts
+    }
+
+    /// How many ghosts come from each rank.
+    pub fn recv_counts(&self) -> &[usize] {
+        &self.recv_counts
+    }
+
     /// Ranks this rank exchanges with (for diagnostics).
     pub fn neighbours(&self) -> usize {
         (0..self.recv_counts.len())

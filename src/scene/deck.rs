@@ -441,8 +441,11 @@ pub enum FdStepDeck {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize, Default)]
 #[serde(rename_all = "kebab-case")]
 pub enum PreconditionerKind {
+    /// Block Jacobi: each rank's diagonal block factored exactly.
     #[default]
     BlockJacobi,
+    /// Restricted additive Schwarz with one layer of overlap (the ghost nodes).
+    Asm,
     None,
 }
 

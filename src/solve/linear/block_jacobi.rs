@@ -35,6 +35,7 @@
 
 use super::ordering::{self, Graph};
 use super::{DistMatrix, Preconditioner};
+use crate::parallel::Comm;
 use crate::Error;
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::solvers::Solve;
@@ -79,8 +80,28 @@ enum Factor {
     Llt,
 }
 
-pub struct BlockJacobi {
+/// A square local block matrix (3×3 blocks, scalar size 3·`n_nodes`) as block rows of
+/// (local block column, entry) pairs: entry e's values are `vals[9e..9e + 9]` (row-major)
+/// of the value array given to [`LocalFactor::new`] / [`LocalFactor::refactor`]. Rows may
+/// list their columns in any order; a (row, column) pair appears at most once.
+#[derive(Debug, Clone, Default)]
+pub struct LocalBlockPattern {
+    pub n_nodes: usize,
+    /// Row `i`'s pairs are `row_ptr[i]..row_ptr[i + 1]`.
+    pub row_ptr: Vec<usize>,
+    pub cols: Vec<usize>,
+    pub entries: Vec<usize>,
+}
+
+/// The exact sparse factorization of a local block matrix ([`LocalBlockPattern`]): the
+/// machinery shared by [`BlockJacobi`] (the diagonal block) and
+/// [`super::asm::RestrictedSchwarz`] (the overlapping subdomain matrix).
+pub struct LocalFactor {
+    /// Prefix of error messages ("block Jacobi", "ASM").
+    label: &'static str,
     n: usize,
+    /// Length of the value array the pattern indexes.
+    vals_len: usize,
     choice: Factorization,
     ordering: FillOrdering,
     /// In `Auto` mode, set once Cholesky failed or the block was non-symmetric.
@@ -92,8 +113,7 @@ pub struct BlockJacobi {
     /// For each CSC position (i, j), the position of (j, i), or `usize::MAX`.
     transpose_pos: Vec<usize>,
     csc_vals: Vec<f64>,
-    nnz_blocks: usize,
-    /// Node graph of the diagonal block (for the nested dissection ordering).
+    /// Node graph of the block (for the nested dissection ordering).
     node_graph: Graph,
     /// Scalar fill-reducing permutation (`perm[new] = old`), computed once.
     dof_perm: Option<(Vec<usize>, Vec<usize>)>,
@@ -112,15 +132,30 @@ pub struct BlockJacobi {
     last_factor_seconds: f64,
 }
 
-impl std::fmt::Debug for BlockJacobi {
+impl std::fmt::Debug for LocalFactor {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("BlockJacobi")
+        f.debug_struct("LocalFactor")
+            .field("label", &self.label)
             .field("n", &self.n)
             .field("nnz", &self.src.len())
             .field("kind", &self.kind())
             .field("ordering", &self.ordering)
             .field("factorizations", &self.factorizations)
             .finish()
+    }
+}
+
+/// Block Jacobi: this rank's diagonal block (owned rows × owned columns) factored by a
+/// [`LocalFactor`] (whose accessors it derefs to).
+#[derive(Debug)]
+pub struct BlockJacobi {
+    f: LocalFactor,
+}
+
+impl std::ops::Deref for BlockJacobi {
+    type Target = LocalFactor;
+    fn deref(&self) -> &LocalFactor {
+        &self.f
     }
 }
 
@@ -143,16 +178,58 @@ impl BlockJacobi {
         ordering: FillOrdering,
     ) -> crate::Result<Self> {
         let n_own = mat.layout().owned_len();
-        let n = 3 * n_own;
-        // Column counts: every diagonal-part block entry in block column k puts 3 entries
-        // in each of the scalar columns 3k, 3k+1, 3k+2.
-        let mut col_ptr = vec![0usize; n + 1];
+        let mut pat = LocalBlockPattern {
+            n_nodes: n_own,
+            row_ptr: Vec::with_capacity(n_own + 1),
+            cols: Vec::new(),
+            entries: Vec::new(),
+        };
+        pat.row_ptr.push(0);
         for i in 0..n_own {
             for e in mat.diag_begin[i]..mat.diag_end[i] {
-                let k = mat.lcol[e] as usize;
-                for b in 0..3 {
-                    col_ptr[3 * k + b + 1] += 3;
-                }
+                pat.cols.push(mat.lcol[e] as usize);
+                pat.entries.push(e);
+            }
+            pat.row_ptr.push(pat.cols.len());
+        }
+        let f = LocalFactor::new("block Jacobi", &pat, &mat.vals, choice, ordering)?;
+        Ok(Self { f })
+    }
+
+    /// Numeric refactorization for new values of the same pattern (symbolic reused).
+    pub fn refactor(&mut self, mat: &DistMatrix) -> crate::Result<()> {
+        if mat.n_owned_dofs() != self.f.n || mat.vals.len() != self.f.vals_len {
+            return Err(Error::runtime(format!(
+                "block Jacobi: refactor with a different pattern ({} dofs, {} blocks; factored \
+                 {} dofs, {} blocks)",
+                mat.n_owned_dofs(),
+                mat.nnz_blocks_local(),
+                self.f.n,
+                self.f.vals_len / 9
+            )));
+        }
+        self.f.refactor(&mat.vals)
+    }
+}
+
+impl LocalFactor {
+    /// Factor the local block matrix `pat` with values `vals` (9 per entry, see
+    /// [`LocalBlockPattern`]). `label` prefixes error messages.
+    pub fn new(
+        label: &'static str,
+        pat: &LocalBlockPattern,
+        vals: &[f64],
+        choice: Factorization,
+        ordering: FillOrdering,
+    ) -> crate::Result<Self> {
+        let n_nodes = pat.n_nodes;
+        let n = 3 * n_nodes;
+        // Column counts: every block entry in block column k puts 3 entries in each of
+        // the scalar columns 3k, 3k+1, 3k+2.
+        let mut col_ptr = vec![0usize; n + 1];
+        for &k in &pat.cols {
+            for b in 0..3 {
+                col_ptr[3 * k + b + 1] += 3;
             }
         }
         for j in 0..n {
@@ -163,10 +240,10 @@ impl BlockJacobi {
         let mut row_idx = vec![0usize; nnz];
         let mut src = vec![0usize; nnz];
         // Rows in increasing order, so each column's row indices come out sorted.
-        for i in 0..n_own {
+        for i in 0..n_nodes {
             for a in 0..3 {
-                for e in mat.diag_begin[i]..mat.diag_end[i] {
-                    let k = mat.lcol[e] as usize;
+                for q in pat.row_ptr[i]..pat.row_ptr[i + 1] {
+                    let (k, e) = (pat.cols[q], pat.entries[q]);
                     for b in 0..3 {
                         let p = next[3 * k + b];
                         next[3 * k + b] += 1;
@@ -189,17 +266,11 @@ impl BlockJacobi {
             })
             .collect();
         let pattern = SymbolicSparseColMat::new_checked(n, n, col_ptr, None, row_idx);
-        let node_cols: Vec<usize> = (0..n_own)
-            .flat_map(|i| mat.lcol[mat.diag_begin[i]..mat.diag_end[i]].iter())
-            .map(|&k| k as usize)
-            .collect();
-        let mut node_ptr = vec![0usize; n_own + 1];
-        for i in 0..n_own {
-            node_ptr[i + 1] = node_ptr[i] + mat.diag_end[i] - mat.diag_begin[i];
-        }
-        let node_graph = Graph::symmetrized(n_own, &node_ptr, &node_cols);
-        let mut bj = Self {
+        let node_graph = Graph::symmetrized(n_nodes, &pat.row_ptr, &pat.cols);
+        let mut f = Self {
+            label,
             n,
+            vals_len: vals.len(),
             choice,
             ordering,
             cholesky_ruled_out: false,
@@ -207,7 +278,6 @@ impl BlockJacobi {
             src,
             transpose_pos,
             csc_vals: vec![0.0; nnz],
-            nnz_blocks: mat.nnz_blocks_local(),
             node_graph,
             dof_perm: None,
             symbolic_lu: None,
@@ -222,20 +292,19 @@ impl BlockJacobi {
             ordering_seconds: 0.0,
             last_factor_seconds: 0.0,
         };
-        bj.refactor(mat)?;
-        Ok(bj)
+        f.refactor(vals)?;
+        Ok(f)
     }
 
-    /// Numeric refactorization for new values of the same pattern (symbolic reused).
-    pub fn refactor(&mut self, mat: &DistMatrix) -> crate::Result<()> {
-        if mat.n_owned_dofs() != self.n || mat.nnz_blocks_local() != self.nnz_blocks {
+    /// Numeric refactorization for new values (`vals`, indexed by the same pattern; the
+    /// symbolic factorization is reused).
+    pub fn refactor(&mut self, vals: &[f64]) -> crate::Result<()> {
+        if vals.len() != self.vals_len {
             return Err(Error::runtime(format!(
-                "block Jacobi: refactor with a different pattern ({} dofs, {} blocks; factored \
-                 {} dofs, {} blocks)",
-                mat.n_owned_dofs(),
-                mat.nnz_blocks_local(),
-                self.n,
-                self.nnz_blocks
+                "{}: refactor with {} values, the pattern indexes {}",
+                self.label,
+                vals.len(),
+                self.vals_len
             )));
         }
         let t = Instant::now();
@@ -246,7 +315,7 @@ impl BlockJacobi {
             return Ok(());
         }
         for (v, &s) in self.csc_vals.iter_mut().zip(&self.src) {
-            *v = mat.vals[s];
+            *v = vals[s];
         }
         let try_cholesky = match self.choice {
             Factorization::Lu => false,
@@ -324,14 +393,15 @@ impl BlockJacobi {
                 CholeskySymbolicParams::default(),
             )
             .map_err(|e| {
-                Error::runtime(format!("block Jacobi: symbolic Cholesky failed: {e:?}"))
+                Error::runtime(format!("{}: symbolic Cholesky failed: {e:?}", self.label))
             })?;
             self.llt_values = Vec::new();
             self.llt_values
                 .try_reserve_exact(sym.len_val())
                 .map_err(|_| {
                     Error::runtime(format!(
-                        "block Jacobi: out of memory for the Cholesky factor ({} values)",
+                        "{}: out of memory for the Cholesky factor ({} values)",
+                        self.label,
                         sym.len_val()
                     ))
                 })?;
@@ -349,7 +419,10 @@ impl BlockJacobi {
         let mut mem =
             MemBuffer::try_new(sym.factorize_numeric_llt_scratch::<f64>(par, Default::default()))
                 .map_err(|_| {
-                Error::runtime("block Jacobi: out of memory for the Cholesky workspace")
+                Error::runtime(format!(
+                    "{}: out of memory for the Cholesky workspace",
+                    self.label
+                ))
             })?;
         sym.factorize_numeric_llt(
             &mut self.llt_values,
@@ -362,8 +435,8 @@ impl BlockJacobi {
         )
         .map_err(|e| {
             Error::runtime(format!(
-                "block Jacobi: the local {}×{} diagonal block is not positive definite ({e:?})",
-                self.n, self.n
+                "{}: the local {}×{} block is not positive definite ({e:?})",
+                self.label, self.n, self.n
             ))
         })?;
         self.factor = Factor::Llt;
@@ -382,8 +455,9 @@ impl BlockJacobi {
                 Some((p, _)) => p.as_ref(),
                 None => self.pattern.as_ref(),
             };
-            let sym = SymbolicLu::try_new(pattern)
-                .map_err(|e| Error::runtime(format!("block Jacobi: symbolic LU failed: {e:?}")))?;
+            let sym = SymbolicLu::try_new(pattern).map_err(|e| {
+                Error::runtime(format!("{}: symbolic LU failed: {e:?}", self.label))
+            })?;
             self.symbolic_lu = Some(sym);
             self.symbolic_factorizations += 1;
             self.symbolic_seconds += t.elapsed().as_secs_f64();
@@ -397,19 +471,21 @@ impl BlockJacobi {
             None => SparseColMatRef::new(self.pattern.as_ref(), &self.csc_vals),
         };
         let sym = self.symbolic_lu.clone().expect("symbolic LU present");
+        let label = self.label;
         let lu = SparseLu::try_new_with_symbolic(sym, a).map_err(|e| match e {
             LuError::SymbolicSingular { index } => Error::runtime(format!(
-                "block Jacobi: the local {}×{} diagonal block is singular (no pivot at step \
-                 {index}); check constraints and contact multiplier rows",
+                "{label}: the local {}×{} block is singular (no pivot at step {index}); check \
+                 constraints and contact multiplier rows",
                 self.n, self.n
             )),
-            LuError::Generic(g) => Error::runtime(format!("block Jacobi: sparse LU failed: {g:?}")),
+            LuError::Generic(g) => Error::runtime(format!("{label}: sparse LU failed: {g:?}")),
         })?;
         self.factor = Factor::Lu(Box::new(lu));
         Ok(())
     }
 
-    fn solve_in_place(&self, z: &mut [f64]) {
+    /// z ← A⁻¹ z (length [`Self::n`]); no-op before a successful factorization.
+    pub fn solve_in_place(&self, z: &mut [f64]) {
         let col = faer::ColMut::from_slice_mut(z);
         match &self.factor {
             Factor::None => {}
@@ -462,9 +538,9 @@ impl BlockJacobi {
         if !err.is_finite() || err > 1.0 {
             self.factor = Factor::None;
             return Err(Error::runtime(format!(
-                "block Jacobi: the local {}×{} diagonal block is numerically singular (check \
-                 solve error {err:.3e}); check constraints and contact multiplier rows",
-                self.n, self.n
+                "{}: the local {}×{} block is numerically singular (check solve error \
+                 {err:.3e}); check constraints and contact multiplier rows",
+                self.label, self.n, self.n
             )));
         }
         Ok(())
@@ -479,7 +555,7 @@ impl BlockJacobi {
             Factor::Llt => Factorization::Cholesky,
         }
     }
-    /// Size of the factored block (owned scalar dofs).
+    /// Size of the factored block (scalar dofs).
     pub fn n(&self) -> usize {
         self.n
     }
@@ -548,14 +624,14 @@ fn permuted_pattern(
 }
 
 impl Preconditioner for BlockJacobi {
-    fn apply(&self, r: &[f64], z: &mut [f64]) {
+    fn apply(&self, _comm: &dyn Comm, r: &[f64], z: &mut [f64]) {
         z.copy_from_slice(r);
-        self.solve_in_place(z);
+        self.f.solve_in_place(z);
     }
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::parallel::{Comm, Layout, SerialComm};
     use crate::solve::linear::matrix::tests::Lcg;
@@ -601,15 +677,15 @@ mod tests {
         let mut bj = BlockJacobi::new(&m1).unwrap();
         let r: Vec<f64> = (0..150).map(|i| (i as f64).sin()).collect();
         let mut z = vec![0.0; 150];
-        bj.apply(&r, &mut z);
+        bj.apply(&SerialComm, &r, &mut z);
         assert!(residual(&m1, &z, &r) < 1e-13);
 
         // Same pattern, other values: the old factors no longer solve it, the new ones do.
         let m2 = tridiag(50, 2, 4.0);
-        bj.apply(&r, &mut z);
+        bj.apply(&SerialComm, &r, &mut z);
         assert!(residual(&m2, &z, &r) > 1e-3);
         bj.refactor(&m2).unwrap();
-        bj.apply(&r, &mut z);
+        bj.apply(&SerialComm, &r, &mut z);
         assert!(residual(&m2, &z, &r) < 1e-13);
         assert_eq!(bj.factorizations(), 2);
         assert_eq!(bj.symbolic_factorizations(), 1);
@@ -624,7 +700,7 @@ mod tests {
         let mut z = vec![0.0; 192];
         let mut bj = BlockJacobi::new(&m).unwrap();
         assert_eq!(bj.kind(), Factorization::Cholesky);
-        bj.apply(&r, &mut z);
+        bj.apply(&SerialComm, &r, &mut z);
         assert!(residual(&m, &z, &r) < 1e-12);
 
         // Symmetric but indefinite (one diagonal entry flipped): Cholesky fails, LU works.
@@ -632,7 +708,7 @@ mod tests {
         m.vals[9 * e] = -m.vals[9 * e];
         bj.refactor(&m).unwrap();
         assert_eq!(bj.kind(), Factorization::Lu);
-        bj.apply(&r, &mut z);
+        bj.apply(&SerialComm, &r, &mut z);
         assert!(residual(&m, &z, &r) < 1e-12);
         assert!(BlockJacobi::with_factorization(&m, Factorization::Cholesky).is_err());
 
@@ -648,7 +724,7 @@ mod tests {
         let bj = BlockJacobi::new(&m).unwrap();
         assert_eq!(bj.kind(), Factorization::Lu);
         assert_eq!(bj.symbolic_factorizations(), 1);
-        bj.apply(&r, &mut z);
+        bj.apply(&SerialComm, &r, &mut z);
         assert!(residual(&m, &z, &r) < 1e-12);
     }
 
@@ -667,7 +743,7 @@ mod tests {
                     assert_eq!(bj.kind(), kind);
                     assert_eq!(bj.ordering(), ord);
                     let mut z = vec![0.0; n];
-                    bj.apply(&r, &mut z);
+                    bj.apply(&SerialComm, &r, &mut z);
                     (bj, z)
                 };
                 let (amd, z_amd) = solve(Factorization::Cholesky, FillOrdering::Amd);
@@ -947,7 +1023,7 @@ mod tests {
             let t_refactor = t.elapsed().as_secs_f64();
             let mut z = vec![0.0; b.len()];
             let t = Instant::now();
-            bj.apply(&b, &mut z);
+            bj.apply(&SerialComm, &b, &mut z);
             let t_solve = t.elapsed().as_secs_f64();
             let res = residual(&m, &z, &b);
             let diff = z_ref.as_ref().map_or(0.0, |r| {

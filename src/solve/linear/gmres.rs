@@ -178,7 +178,7 @@ pub fn gmres(
             let w = &mut rest[..n];
             let vk = &basis[k * n..];
             let t = Instant::now();
-            pc.apply(vk, &mut z);
+            pc.apply(comm, vk, &mut z);
             st.seconds_in_preconditioner += t.elapsed().as_secs_f64();
             let t = Instant::now();
             a.apply(comm, &z, w)?;
@@ -282,7 +282,7 @@ pub fn gmres(
             }
         }
         let t = Instant::now();
-        pc.apply(&r, &mut z);
+        pc.apply(comm, &r, &mut z);
         st.seconds_in_preconditioner += t.elapsed().as_secs_f64();
         for (xi, zi) in x.iter_mut().zip(&z) {
             *xi += zi;

@@ -325,6 +325,12 @@ impl DistMatrix {
         &self.ghost_blocks
     }
 
+    /// The halo plan over the scalar dofs of [`Self::ghost_blocks`] (3 per block, in
+    /// that order).
+    pub fn halo(&self) -> &HaloPlan {
+        &self.halo
+    }
+
     /// y = A x on owned scalar slices (one halo exchange inside).
     pub fn spmv(&self, comm: &dyn Comm, x: &[f64], y: &mut [f64]) {
         let n = self.n_owned_dofs();

@@ -1,18 +1,23 @@
-//! Distributed sparse linear algebra: block-sparse matrix, GMRES, block Jacobi.
+//! Distributed sparse linear algebra: block-sparse matrix, GMRES, block Jacobi and
+//! restricted additive Schwarz preconditioners.
 //!
 //! Vectors are distributed by their owned parts (the scalar slice of the rank's
 //! contiguous range). The seams are [`LinearOperator`] (an assembled matrix, or a
 //! matrix-free Jacobian product that evaluates a residual and may fail) and
-//! [`Preconditioner`] (local: block Jacobi needs no communication).
+//! [`Preconditioner`] (block Jacobi is local; restricted additive Schwarz does one halo
+//! exchange per application).
 
+pub mod asm;
 pub mod block_jacobi;
 pub mod gmres;
 pub mod lagged;
 pub mod matrix;
 pub mod ordering;
 
-pub use block_jacobi::{BlockJacobi, Factorization, FillOrdering};
+pub use asm::RestrictedSchwarz;
+pub use block_jacobi::{BlockJacobi, Factorization, FillOrdering, LocalBlockPattern, LocalFactor};
 pub use gmres::{gmres, GmresOptions, GmresStats};
+pub use lagged::LaggedPreconditioner;
 
 pub use matrix::DistMatrix;
 
@@ -41,9 +46,24 @@ impl LinearOperator for &DistMatrix {
     }
 }
 
-/// z = M⁻¹ r on owned parts; local (no communication).
+/// z = M⁻¹ r on owned parts.
+///
+/// Collective: every rank applies its preconditioner together (an implementation may
+/// communicate, e.g. [`RestrictedSchwarz`] gathers r on its overlap).
 pub trait Preconditioner {
-    fn apply(&self, r: &[f64], z: &mut [f64]);
+    fn apply(&self, comm: &dyn Comm, r: &[f64], z: &mut [f64]);
+}
+
+/// Which preconditioner the Krylov solves use.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum PcKind {
+    /// None: z = r.
+    None,
+    /// Block Jacobi ([`BlockJacobi`]): each rank's diagonal block factored exactly.
+    #[default]
+    BlockJacobi,
+    /// Restricted additive Schwarz with one layer of overlap ([`RestrictedSchwarz`]).
+    Asm,
 }
 
 /// No preconditioning: z = r.
@@ -51,7 +71,7 @@ pub trait Preconditioner {
 pub struct Identity;
 
 impl Preconditioner for Identity {
-    fn apply(&self, r: &[f64], z: &mut [f64]) {
+    fn apply(&self, _comm: &dyn Comm, r: &[f64], z: &mut [f64]) {
         z.copy_from_slice(r);
     }
 }

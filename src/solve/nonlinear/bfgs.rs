@@ -47,8 +47,9 @@
 use super::common::{evaluate, precond_solve, Constraints, Eval, Monitor, Verdict};
 use super::{NonlinearOptions, NonlinearProblem, SolveStats};
 use crate::parallel::Comm;
-use crate::solve::linear::lagged::LaggedBlockJacobi;
+use crate::solve::linear::lagged::LaggedPreconditioner;
 use crate::solve::linear::matrix::DistMatrix;
+use crate::solve::linear::PcKind;
 use crate::{ErrorKind, Result};
 use std::time::Instant;
 
@@ -247,7 +248,7 @@ pub fn bfgs(
     r: &mut [f64],
     prescribed: &[(usize, f64)],
     k: &mut DistMatrix,
-    pc: &mut LaggedBlockJacobi,
+    pc: &mut LaggedPreconditioner,
     opts: &NonlinearOptions,
 ) -> Result<SolveStats> {
     // The factorization lives from one reform to the next: no refactor on the lag count.
@@ -269,7 +270,7 @@ fn reform(
     ev: &Eval,
     cons: &Constraints,
     k: &mut DistMatrix,
-    pc: &mut LaggedBlockJacobi,
+    pc: &mut LaggedPreconditioner,
     opts: &NonlinearOptions,
     gap: &mut [f64],
     kd: &mut [f64],
@@ -293,10 +294,10 @@ fn reform(
     }
     k.constrain(comm, &cons.dofs);
     st.seconds_assembly += t1.elapsed().as_secs_f64();
-    if opts.block_jacobi {
+    if opts.preconditioner != PcKind::None {
         let t2 = Instant::now();
         pc.invalidate();
-        let res = pc.update(comm, k);
+        let res = pc.update(comm, k, opts.preconditioner);
         st.seconds_linear += t2.elapsed().as_secs_f64();
         match res {
             Ok(f) => st.factorizations += f as usize,
@@ -317,7 +318,7 @@ fn run(
     r: &mut [f64],
     prescribed: &[(usize, f64)],
     k: &mut DistMatrix,
-    pc: &mut LaggedBlockJacobi,
+    pc: &mut LaggedPreconditioner,
     opts: &NonlinearOptions,
 ) -> Result<SolveStats> {
     let n = u.len();
@@ -388,7 +389,7 @@ fn run(
                 &rhs,
                 &mut d,
                 &opts.linear,
-                opts.block_jacobi,
+                opts.preconditioner,
                 &mut st,
             )?
             .is_none()
@@ -426,7 +427,7 @@ fn run(
             &rhs,
             &mut d,
             &opts.linear,
-            opts.block_jacobi,
+            opts.preconditioner,
             &mut st,
         )?
         .is_none()

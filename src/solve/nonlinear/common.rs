@@ -1,12 +1,12 @@
 //! What the nonlinear solvers share: the constraint algebra, the convergence test, the
-//! preconditioned linear solve with a (lagged) block-Jacobi factorization, and the
+//! preconditioned linear solve with a (lagged) factored preconditioner, and the
 //! backtracking line search on ‖r_free‖.
 
 use super::{NonlinearOptions, NonlinearProblem, SolveStats};
 use crate::parallel::Comm;
 use crate::solve::linear::gmres::{gmres, GmresOptions, GmresStats};
-use crate::solve::linear::lagged::LaggedBlockJacobi;
-use crate::solve::linear::{Identity, LinearOperator, Preconditioner};
+use crate::solve::linear::lagged::LaggedPreconditioner;
+use crate::solve::linear::{Identity, LinearOperator, PcKind, Preconditioner};
 use crate::{ErrorKind, Result};
 use std::time::Instant;
 
@@ -224,27 +224,28 @@ impl Monitor {
 /// still used as the Newton correction.
 pub const ACCEPTABLE_LINEAR_RESIDUAL: f64 = 1e-6;
 
-/// Solve `a x = b` by GMRES preconditioned with the (possibly kept) block-Jacobi
-/// factorization in `pc` of the matrix `pc_of`; a kept factorization under which GMRES
-/// fails is refreshed once. `x` holds the initial guess. `Ok(None)`: failed (reason set).
+/// Solve `a x = b` by GMRES preconditioned with the (possibly kept) factorization of the
+/// `kind` of preconditioner in `pc` of the matrix `pc_of` (none for [`PcKind::None`]); a
+/// kept factorization under which GMRES fails is refreshed once. `x` holds the initial guess. `Ok(None)`: failed (reason set).
 #[allow(clippy::too_many_arguments)]
 pub fn precond_solve(
     comm: &dyn Comm,
     a: &mut dyn LinearOperator,
     pc_of: &crate::solve::linear::matrix::DistMatrix,
-    pc: &mut LaggedBlockJacobi,
+    pc: &mut LaggedPreconditioner,
     b: &[f64],
     x: &mut [f64],
     lin: &GmresOptions,
-    block_jacobi: bool,
+    kind: PcKind,
     st: &mut SolveStats,
 ) -> Result<Option<GmresStats>> {
     let t = Instant::now();
     let x0 = x.to_vec();
+    let factored = kind != PcKind::None;
     let mut fresh = false;
     let out = loop {
-        if block_jacobi {
-            match pc.update(comm, pc_of) {
+        if factored {
+            match pc.update(comm, pc_of, kind) {
                 Ok(f) => {
                     fresh |= f;
                     st.factorizations += f as usize;
@@ -255,7 +256,7 @@ pub fn precond_solve(
                 }
             }
         }
-        let prec: &dyn Preconditioner = match (block_jacobi, pc.get()) {
+        let prec: &dyn Preconditioner = match (factored, pc.get()) {
             (true, Some(p)) => p,
             _ => &Identity,
         };
@@ -270,7 +271,7 @@ pub fn precond_solve(
         if gs.residual_norm <= ACCEPTABLE_LINEAR_RESIDUAL * gs.rhs_norm {
             break Some(gs);
         }
-        if fresh || !block_jacobi {
+        if fresh || !factored {
             st.reason = format!(
                 "GMRES did not converge in {} iterations (relative residual {:.3e})",
                 gs.iterations,
@@ -379,7 +380,7 @@ mod tests {
             increment_rtol: 1e-6,
             energy_rtol: 1e-8,
             linear: GmresOptions::default(),
-            block_jacobi: true,
+            preconditioner: PcKind::BlockJacobi,
             pc_lag: 0,
             bfgs_reform: 11,
             fd_delta: 1e-4,

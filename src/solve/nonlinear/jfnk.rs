@@ -5,7 +5,7 @@
 //! * ε (see [`FdRule`]): by default δ·h/‖v‖ with h the mean element length and
 //!   δ = 1e-4, i.e. the perturbation moves the nodes by 10⁻⁴ of an element whatever the
 //!   scale of v; Walker–Pernice's √((1 + ‖u‖) ε_mach)/‖v‖ on request.
-//! * Preconditioner: block Jacobi of the stiffness assembled and factored once at the
+//! * Preconditioner: block Jacobi (or ASM) of the stiffness assembled and factored once at the
 //!   start of the step (lagged); reassembled and refactored only if GMRES fails under it.
 //! * Forcing terms: Eisenstat–Walker choice 2 (η = 0.9 (‖r_k‖/‖r_{k−1}‖)², with their
 //!   safeguard, capped at 0.9), never tighter than needed to meet the residual tolerance.
@@ -18,9 +18,9 @@ use super::common::{evaluate, take_step, Constraints, Eval, Monitor, Verdict};
 use super::{FdRule, NonlinearOptions, NonlinearProblem, SolveStats};
 use crate::parallel::Comm;
 use crate::solve::linear::gmres::{gmres, GmresOptions};
-use crate::solve::linear::lagged::LaggedBlockJacobi;
+use crate::solve::linear::lagged::LaggedPreconditioner;
 use crate::solve::linear::matrix::DistMatrix;
-use crate::solve::linear::{Identity, LinearOperator, Preconditioner};
+use crate::solve::linear::{Identity, LinearOperator, PcKind, Preconditioner};
 use crate::{ErrorKind, Result};
 use std::time::Instant;
 
@@ -120,13 +120,15 @@ impl LinearOperator for FdJacobian<'_> {
 }
 
 /// Assemble and factor the preconditioning stiffness at `u` (collective).
+#[allow(clippy::too_many_arguments)]
 fn refresh_preconditioner(
     comm: &dyn Comm,
     problem: &mut dyn NonlinearProblem,
     u: &[f64],
     k: &mut DistMatrix,
-    pc: &mut LaggedBlockJacobi,
+    pc: &mut LaggedPreconditioner,
     cons: &Constraints,
+    opts: &NonlinearOptions,
     st: &mut SolveStats,
 ) -> Result<bool> {
     let t = Instant::now();
@@ -142,7 +144,7 @@ fn refresh_preconditioner(
     st.seconds_assembly += t.elapsed().as_secs_f64();
     let t = Instant::now();
     pc.invalidate();
-    let ok = match pc.update(comm, k) {
+    let ok = match pc.update(comm, k, opts.preconditioner) {
         Ok(f) => {
             st.factorizations += f as usize;
             true
@@ -165,13 +167,14 @@ pub fn jfnk(
     r: &mut [f64],
     prescribed: &[(usize, f64)],
     k: &mut DistMatrix,
-    pc: &mut LaggedBlockJacobi,
+    pc: &mut LaggedPreconditioner,
     opts: &NonlinearOptions,
 ) -> Result<SolveStats> {
     let n = u.len();
     let mut st = SolveStats::default();
     let cons = Constraints::new(n, prescribed);
-    if opts.block_jacobi && !refresh_preconditioner(comm, problem, u, k, pc, &cons, &mut st)? {
+    let factored = opts.preconditioner != PcKind::None;
+    if factored && !refresh_preconditioner(comm, problem, u, k, pc, &cons, opts, &mut st)? {
         return Ok(st);
     }
     let mut du = vec![0.0; n];
@@ -257,7 +260,7 @@ fn direction(
     eta: f64,
     du: &mut [f64],
     k: &mut DistMatrix,
-    pc: &mut LaggedBlockJacobi,
+    pc: &mut LaggedPreconditioner,
     opts: &NonlinearOptions,
     st: &mut SolveStats,
 ) -> Result<bool> {
@@ -294,7 +297,7 @@ fn direction(
         };
         for attempt in 0..2 {
             du.copy_from_slice(gapv);
-            let prec: &dyn Preconditioner = match (opts.block_jacobi, pc.get()) {
+            let prec: &dyn Preconditioner = match (opts.preconditioner != PcKind::None, pc.get()) {
                 (true, Some(p)) => p,
                 _ => &Identity,
             };
@@ -303,9 +306,9 @@ fn direction(
             if gs.converged {
                 return Ok(true);
             }
-            if attempt == 0 && opts.block_jacobi {
+            if attempt == 0 && opts.preconditioner != PcKind::None {
                 // GMRES stalled under the lagged factorization: refresh it at this point.
-                if !refresh_preconditioner(comm, op.problem, u, k, pc, cons, st)? {
+                if !refresh_preconditioner(comm, op.problem, u, k, pc, cons, opts, st)? {
                     return Ok(false);
                 }
                 continue;

@@ -9,8 +9,9 @@ pub mod newton;
 
 use crate::parallel::Comm;
 use crate::solve::linear::gmres::GmresOptions;
-use crate::solve::linear::lagged::LaggedBlockJacobi;
+use crate::solve::linear::lagged::LaggedPreconditioner;
 use crate::solve::linear::matrix::DistMatrix;
+use crate::solve::linear::PcKind;
 use crate::Result;
 
 /// The three nonlinear solvers (DESIGN.md, "Nonlinear solvers").
@@ -68,7 +69,8 @@ pub struct NonlinearOptions {
     /// GMRES settings: the tolerance for Newton and BFGS solves; JFNK's tolerance is the
     /// Eisenstat–Walker forcing term (never below this).
     pub linear: GmresOptions,
-    pub block_jacobi: bool,
+    /// The preconditioner of the Krylov solves (factored ones may be lagged).
+    pub preconditioner: PcKind,
     /// Newton: iterations a factorization is kept for (0 = every iteration).
     pub pc_lag: usize,
     /// BFGS: reform (reassemble and refactor) the stiffness every n iterations.
@@ -91,7 +93,7 @@ pub fn solve(
     r: &mut [f64],
     prescribed: &[(usize, f64)],
     k: &mut DistMatrix,
-    pc: &mut LaggedBlockJacobi,
+    pc: &mut LaggedPreconditioner,
     opts: &NonlinearOptions,
 ) -> Result<SolveStats> {
     match opts.kind {

@@ -10,7 +10,7 @@
 use super::common::{evaluate, precond_solve, take_step, Constraints, Monitor, Verdict};
 use super::{NonlinearOptions, NonlinearProblem, SolveStats};
 use crate::parallel::Comm;
-use crate::solve::linear::lagged::LaggedBlockJacobi;
+use crate::solve::linear::lagged::LaggedPreconditioner;
 use crate::solve::linear::matrix::DistMatrix;
 use crate::{ErrorKind, Result};
 use std::time::Instant;
@@ -26,7 +26,7 @@ pub fn newton(
     r: &mut [f64],
     prescribed: &[(usize, f64)],
     k: &mut DistMatrix,
-    pc: &mut LaggedBlockJacobi,
+    pc: &mut LaggedPreconditioner,
     opts: &NonlinearOptions,
 ) -> Result<SolveStats> {
     let n = u.len();
@@ -84,7 +84,7 @@ pub fn newton(
             &rhs,
             &mut du,
             &opts.linear,
-            opts.block_jacobi,
+            opts.preconditioner,
             &mut st,
         )?
         .is_none()
