@@ -219,8 +219,13 @@ pub fn jfnk(
         }
         prev_rn = ev.rn;
         cons.gap_vector(u, &mut gapv);
+        // The first iteration starts where the preconditioning stiffness was just
+        // assembled: it is the exact Jacobian there, so it is the operator too. That
+        // also keeps the Krylov operator linear at a converged plastic state, where a
+        // finite-difference product loads or unloads depending on the direction.
+        let assembled = it == 0 && factored;
         if !direction(
-            comm, problem, u, r, &cons, &gapv, &ev, eta_k, &mut du, k, pc, opts, &mut st,
+            comm, problem, u, r, &cons, &gapv, &ev, eta_k, &mut du, k, pc, opts, assembled, &mut st,
         )? {
             return Ok(st);
         }
@@ -247,6 +252,8 @@ pub fn jfnk(
 /// One JFNK linear solve J Δu = −r_f − J_fc (g − u_c), Δu_c = g − u_c (the coupling is
 /// itself one finite-difference product), by GMRES to the forcing term `eta` with the
 /// lagged preconditioner, refreshed once at the current point if GMRES fails under it.
+/// With `assembled`, GMRES works on `k` itself (the Jacobian just assembled at `u` for
+/// the preconditioner) instead of finite-difference products.
 /// `Ok(false)`: the iteration failed (reason in `st`).
 #[allow(clippy::too_many_arguments)]
 fn direction(
@@ -262,6 +269,7 @@ fn direction(
     k: &mut DistMatrix,
     pc: &mut LaggedPreconditioner,
     opts: &NonlinearOptions,
+    assembled: bool,
     st: &mut SolveStats,
 ) -> Result<bool> {
     let n = u.len();
@@ -295,18 +303,26 @@ fn direction(
             rtol: eta,
             ..opts.linear
         };
-        for attempt in 0..2 {
+        // A kept factorization gets one refresh; a fresh one (the assembled operator's)
+        // none.
+        let attempts = if assembled { 1 } else { 2 };
+        for attempt in 0..attempts {
             du.copy_from_slice(gapv);
             let prec: &dyn Preconditioner = match (opts.preconditioner != PcKind::None, pc.get()) {
                 (true, Some(p)) => p,
                 _ => &Identity,
             };
-            let gs = gmres(comm, &mut op, prec, &rhs, du, &lin)?;
+            let gs = if assembled {
+                let mut kop: &DistMatrix = k;
+                gmres(comm, &mut kop, prec, &rhs, du, &lin)?
+            } else {
+                gmres(comm, &mut op, prec, &rhs, du, &lin)?
+            };
             st.linear_iterations += gs.iterations;
             if gs.converged {
                 return Ok(true);
             }
-            if attempt == 0 && opts.preconditioner != PcKind::None {
+            if attempt == 0 && opts.preconditioner != PcKind::None && !assembled {
                 // GMRES stalled under the lagged factorization: refresh it at this point.
                 if !refresh_preconditioner(comm, op.problem, u, k, pc, cons, opts, st)? {
                     return Ok(false);
