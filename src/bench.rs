@@ -67,8 +67,30 @@ pub(crate) fn parse_cells(s: Option<&str>, default: [usize; 3]) -> Result<[usize
     }
 }
 
+/// A deck text partitioned (METIS) over the ranks of `comm` and distributed: the model
+/// the benchmarks time.
+pub(crate) fn generated_model(comm: &dyn Comm, text: String, label: &str) -> Result<Model> {
+    let p = comm.size();
+    let pieces = on_rank0(comm, || {
+        let src = crate::scene::Source {
+            text: text.clone(),
+            dir: ".".into(),
+            label: label.into(),
+        };
+        let def = crate::scene::model(&src)?;
+        let part = partition_elements(&def.mesh, p)?;
+        Ok(distribute::split(&def, &part, p))
+    })?;
+    let local = distribute::scatter(comm, pieces)?;
+    Model::new(comm, local)
+}
+
 /// Median of repeated timings of a collective action (barrier before each).
-fn time_median(comm: &dyn Comm, reps: usize, mut f: impl FnMut() -> Result<()>) -> Result<f64> {
+pub(crate) fn time_median(
+    comm: &dyn Comm,
+    reps: usize,
+    mut f: impl FnMut() -> Result<()>,
+) -> Result<f64> {
     let mut ts = Vec::with_capacity(reps);
     for _ in 0..reps {
         comm.barrier();
@@ -101,18 +123,7 @@ pub fn bench_linear(
     };
     let p = comm.size();
     let t_setup = Instant::now();
-    let pieces = on_rank0(comm, || {
-        let src = crate::scene::Source {
-            text: deck(cells),
-            dir: ".".into(),
-            label: "bench-linear".into(),
-        };
-        let def = crate::scene::model(&src)?;
-        let part = partition_elements(&def.mesh, p)?;
-        Ok(distribute::split(&def, &part, p))
-    })?;
-    let local = distribute::scatter(comm, pieces)?;
-    let mut model = Model::new(comm, local)?;
+    let mut model = generated_model(comm, deck(cells), "bench-linear")?;
     let setup_s = t_setup.elapsed().as_secs_f64();
     let n = model.n_owned_dofs();
     let ne_local = model.local.n_elems() as f64;

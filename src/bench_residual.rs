@@ -3,12 +3,9 @@
 //! hex8 block at a fixed inhomogeneous deformation, on however many ranks it is started
 //! with. scripts/bench-core runs it on 1 and 2 ranks beside the linear benchmark.
 
-use crate::app::on_rank0;
-use crate::model::Model;
+use crate::bench::{generated_model, time_median};
 use crate::parallel::Comm;
-use crate::partition::{distribute, partition_elements};
 use crate::{Error, Result};
-use std::time::Instant;
 
 /// (label, material table, part formulation).
 const CASES: &[(&str, &str, &str)] = &[
@@ -55,20 +52,6 @@ fn deck(cells: [usize; 3], material: &str, formulation: &str) -> String {
     )
 }
 
-/// Median of `reps` timings of a collective action (barrier before and after each).
-fn median_seconds(comm: &dyn Comm, reps: usize, mut f: impl FnMut() -> Result<()>) -> Result<f64> {
-    let mut ts = Vec::with_capacity(reps);
-    for _ in 0..reps {
-        comm.barrier();
-        let t = Instant::now();
-        f()?;
-        comm.barrier();
-        ts.push(t.elapsed().as_secs_f64());
-    }
-    ts.sort_by(|a, b| a.total_cmp(b));
-    Ok(ts[ts.len() / 2])
-}
-
 pub fn bench_residual(
     comm: &dyn Comm,
     cells: Option<&str>,
@@ -87,19 +70,8 @@ pub fn bench_residual(
     let p = comm.size();
     let mut rows = Vec::new();
     for (label, material, formulation) in CASES {
-        let text = deck(cells, material, formulation);
-        let pieces = on_rank0(comm, || {
-            let src = crate::scene::Source {
-                text: text.clone(),
-                dir: ".".into(),
-                label: "bench-residual".into(),
-            };
-            let def = crate::scene::model(&src)?;
-            let part = partition_elements(&def.mesh, p)?;
-            Ok(distribute::split(&def, &part, p))
-        })?;
-        let local = distribute::scatter(comm, pieces)?;
-        let mut model = Model::new(comm, local)?;
+        let mut model =
+            generated_model(comm, deck(cells, material, formulation), "bench-residual")?;
         // u = (F − I) X with F = diag(1.02, 0.99, 0.99) plus a smooth wiggle: a 2 %
         // stretch is 17 yield strains for the J2 case, so every point returns.
         let n = model.n_owned_dofs();
@@ -113,11 +85,11 @@ pub fn bench_residual(
             .collect();
         let mut r = vec![0.0; n];
         model.residual(comm, &u, 1.0, &mut r)?;
-        let t_res = median_seconds(comm, reps, || {
+        let t_res = time_median(comm, reps, || {
             model.residual(comm, &u, 1.0, &mut r).map(|_| ())
         })?;
         let mut k = model.new_matrix(comm);
-        let t_jac = median_seconds(comm, reps, || model.jacobian(comm, &u, 1.0, &mut k))?;
+        let t_jac = time_median(comm, reps, || model.jacobian(comm, &u, 1.0, &mut k))?;
         let elems = comm.allgather_f64(model.local.n_elems() as f64);
         let max_elems = elems.iter().cloned().fold(0.0, f64::max);
         rows.push(serde_json::json!({

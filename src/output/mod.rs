@@ -26,7 +26,11 @@ pub(crate) mod testutil {
     /// Run a Python script with `/usr/bin/python3` (it must print one JSON value) and
     /// parse its output. Fails the test, with a clear message, if python or h5py is missing.
     pub fn python_json(script: &str, args: &[&str]) -> serde_json::Value {
+        // Unit tests run on threads: a python child spawned by another test may inherit
+        // (fork) an HDF5 descriptor of this test's file while it is still being written
+        // and hold its flock, so the reader must not insist on locking.
         let out = Command::new("/usr/bin/python3")
+            .env("HDF5_USE_FILE_LOCKING", "FALSE")
             .arg("-c")
             .arg(script)
             .args(args)
