@@ -273,20 +273,16 @@ fn twisted_block_all_solvers_on_one_and_two_ranks() {
     }
 }
 
-#[test]
-fn prescribed_stretch_same_on_one_and_two_ranks() {
-    let dir = temp_dir("rank-stretch");
-    ok(alfe(
-        &dir,
-        1,
-        &["run", "cube-stretch", "--out", "r1", "--quiet"],
-    ));
+/// Run a built-in scene on 1 rank and on `mpirun -n 2`, and compare the runs.
+fn same_on_one_and_two_ranks(tmp: &str, scene: &str) {
+    let dir = temp_dir(tmp);
+    ok(alfe(&dir, 1, &["run", scene, "--out", "r1", "--quiet"]));
     ok(alfe(
         &dir,
         2,
         &[
             "run",
-            "cube-stretch",
+            scene,
             "--out",
             "r2",
             "--partitions",
@@ -294,56 +290,23 @@ fn prescribed_stretch_same_on_one_and_two_ranks() {
             "--quiet",
         ],
     ));
-    assert_same_runs(&dir.join("r1"), &dir.join("r2"), "cube-stretch");
+    assert_same_runs(&dir.join("r1"), &dir.join("r2"), scene);
+}
+
+#[test]
+fn prescribed_stretch_same_on_one_and_two_ranks() {
+    same_on_one_and_two_ranks("rank-stretch", "cube-stretch");
 }
 
 /// J2 plasticity to large strain (F-bar, history, step cuts) is rank-independent.
 #[test]
 fn plastic_bar_same_on_one_and_two_ranks() {
-    let dir = temp_dir("rank-plastic");
-    ok(alfe(
-        &dir,
-        1,
-        &["run", "plastic-bar", "--out", "r1", "--quiet"],
-    ));
-    ok(alfe(
-        &dir,
-        2,
-        &[
-            "run",
-            "plastic-bar",
-            "--out",
-            "r2",
-            "--partitions",
-            "parts",
-            "--quiet",
-        ],
-    ));
-    assert_same_runs(&dir.join("r1"), &dir.join("r2"), "plastic-bar");
+    same_on_one_and_two_ranks("rank-plastic", "plastic-bar");
 }
 
 #[test]
 fn tet_patch_same_on_one_and_two_ranks() {
-    let dir = temp_dir("rank-tet");
-    ok(alfe(
-        &dir,
-        1,
-        &["run", "patch-tet4", "--out", "r1", "--quiet"],
-    ));
-    ok(alfe(
-        &dir,
-        2,
-        &[
-            "run",
-            "patch-tet4",
-            "--out",
-            "r2",
-            "--partitions",
-            "parts",
-            "--quiet",
-        ],
-    ));
-    assert_same_runs(&dir.join("r1"), &dir.join("r2"), "patch-tet4");
+    same_on_one_and_two_ranks("rank-tet", "patch-tet4");
 }
 
 /// GMRES + block Jacobi on 2 ranks, ≥ 50k unknowns, to the asked tolerance on the
