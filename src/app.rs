@@ -33,6 +33,8 @@ pub struct RunOptions {
     pub quiet: bool,
     /// Override the deck's nonlinear solver (`--solver`).
     pub solver: Option<SolverKind>,
+    /// Switch every wall's enforcement (`--contact alm|penalty`).
+    pub contact: Option<crate::contact::wall::ContactMethod>,
 }
 
 /// What a run leaves behind besides its files (also written to `summary.json`).
@@ -172,7 +174,12 @@ pub fn setup(comm: &dyn Comm, opts: &RunOptions, phases: &mut Phases) -> Result<
     let mut t_part = 0.0;
     let pieces = on_rank0(comm, || {
         let src = crate::scene::load(&opts.target)?;
-        let def = crate::scene::model(&src)?;
+        let mut def = crate::scene::model(&src)?;
+        if let Some(m) = opts.contact {
+            for w in &mut def.walls {
+                w.method = m;
+            }
+        }
         let tp = Instant::now();
         let (part, origin, _) = cache::get(
             &opts.partitions,
@@ -265,7 +272,7 @@ pub fn run(comm: &dyn Comm, opts: &RunOptions) -> Result<RunOutcome> {
             comm.size(),
             model.local.n_nodes_global,
             model.local.n_elems_global,
-            3 * model.local.n_nodes_global,
+            model.dofs.global_len(),
             n_steps
         );
         if let Some((dt, st)) = &explicit_dt {
@@ -369,7 +376,7 @@ pub fn run(comm: &dyn Comm, opts: &RunOptions) -> Result<RunOutcome> {
         ranks: comm.size(),
         nodes: model.local.n_nodes_global,
         elements: model.local.n_elems_global,
-        unknowns: 3 * model.local.n_nodes_global,
+        unknowns: model.dofs.global_len(),
         solver: method,
         analysis: match kind {
             AnalysisKind::Static => "static",

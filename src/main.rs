@@ -17,6 +17,7 @@ usage:
       --repartition      recompute a cached partition instead of using it
       --quiet            no progress lines
       --solver S         newton | bfgs | jfnk (overrides the deck's [solver] nonlinear)
+      --contact M        alm | penalty (switches every [[walls]] entry of the scene)
   alfe scenes                            list the built-in scenes
   alfe scene show NAME                   print a built-in scene's deck
   alfe check SCENE|DECK [--ranks N]      validate; print model size and partition quality
@@ -123,7 +124,7 @@ fn main_inner(comm: &dyn Comm, raw: &[String]) -> Result<()> {
         "run" => {
             let a = parse_args(
                 rest,
-                &["out", "partitions", "solver"],
+                &["out", "partitions", "solver", "contact"],
                 &["repartition", "quiet"],
             )?;
             let solver = a
@@ -136,7 +137,16 @@ fn main_inner(comm: &dyn Comm, raw: &[String]) -> Result<()> {
                     })
                 })
                 .transpose()?;
+            let contact = a
+                .get("contact")
+                .map(|s| {
+                    alfe::contact::wall::ContactMethod::parse(s).ok_or_else(|| {
+                        Error::input(format!("--contact: expected alm or penalty, got `{s}`"))
+                    })
+                })
+                .transpose()?;
             let opts = RunOptions {
+                contact,
                 target: one_target(&a.words, "run")?,
                 out: a.get("out").map(PathBuf::from),
                 partitions: PathBuf::from(a.get("partitions").unwrap_or("partitions")),

@@ -203,6 +203,8 @@ pub struct ModelDef {
     pub loads: Vec<Load>,
     /// Node sets whose reaction forces are reported, in column order.
     pub reaction_sets: Vec<String>,
+    /// Rigid walls (tracked nodes by global node number).
+    pub walls: Vec<crate::contact::wall::WallDef>,
     pub settings: Settings,
 }
 

@@ -61,10 +61,12 @@ impl Model {
                 }
             }
         }
-        let no = self.n_owned_dofs();
+        let no = self.n_node_dofs();
         let (own, ghost) = m.split_at_mut(no);
         self.halo.reverse_add(comm, ghost, own);
+        // Multipliers carry no mass.
         m.truncate(no);
+        m.resize(self.n_owned_dofs(), 0.0);
         m
     }
 
@@ -100,10 +102,11 @@ impl Model {
                         }
                     }
                 }
-                let no = v.len();
+                let no = self.n_node_dofs();
                 let (own, ghost) = f.split_at_mut(no);
                 self.halo.reverse_add(comm, ghost, own);
-                out.copy_from_slice(own);
+                out[..no].copy_from_slice(own);
+                out[no..].iter_mut().for_each(|x| *x = 0.0);
             }
         }
     }
@@ -249,7 +252,7 @@ impl Model {
     /// Initial velocity on owned dofs from the deck's `[[initial_velocity]]`.
     pub fn initial_velocity(&self) -> Vec<f64> {
         let no = self.local.n_owned();
-        let mut v = vec![0.0; 3 * no];
+        let mut v = vec![0.0; self.n_owned_dofs()];
         for (set, vel) in &self.local.settings.initial_velocity {
             for &n in self
                 .local

@@ -2,6 +2,7 @@
 //! elements, ghost contributions summed on owners, constraints, loads and reactions.
 //! It knows physics and calls the parallel layer only through [`Comm`] and plans.
 
+pub mod contact;
 pub mod def;
 pub mod dynamics;
 
@@ -14,10 +15,11 @@ use crate::partition::distribute::LocalModel;
 use crate::solve::linear::matrix::DistMatrix;
 use crate::{Error, Result};
 
-/// Unknowns are numbered in triples ("blocks"): for now one block per node (its
-/// displacement). Contact multipliers of tracked nodes and rigid-body DOFs will be
-/// appended to each rank's block range (DESIGN.md), which is why the model speaks of
-/// blocks and dofs rather than nodes.
+/// Unknowns are numbered in triples ("blocks"): each rank's range holds one block per
+/// owned node (its displacement), then one block per owned node tracked by an ALM wall
+/// (its multipliers λ_N, λ_T1, λ_T2); rigid-body DOFs will follow (DESIGN.md). Local
+/// vectors over owned + ghost nodes (`u_local`) hold node dofs only: owned nodes, then
+/// ghosts; multipliers are never ghosted (their rows couple only to their own node).
 pub struct Model {
     pub local: LocalModel,
     pub materials: Vec<Box<dyn Material>>,
@@ -43,6 +45,8 @@ pub struct Model {
     work: Vec<f64>,
     /// Total element evaluations (for rates).
     pub element_evaluations: u64,
+    /// Rigid walls and their tracked nodes on this rank.
+    pub contact: contact::Contact,
 }
 
 /// What a residual evaluation reports besides the residual.
@@ -55,18 +59,34 @@ pub struct ResidualInfo {
 impl Model {
     /// Collective: build plans, material objects and history storage.
     pub fn new(comm: &dyn Comm, local: LocalModel) -> Result<Self> {
-        let blocks = Layout::from_counts(&local.owned_nodes_per_rank, local.rank);
-        let dof_counts: Vec<usize> = local.owned_nodes_per_rank.iter().map(|c| 3 * c).collect();
+        let n_mult = contact::Contact::n_mult_blocks(&local.walls);
+        let mults = Layout::gather(comm, n_mult);
+        let nodes = Layout::from_counts(&local.owned_nodes_per_rank, local.rank);
+        let block_counts: Vec<usize> = (0..nodes.size())
+            .map(|r| nodes.starts[r + 1] - nodes.starts[r] + mults.starts[r + 1] - mults.starts[r])
+            .collect();
+        let blocks = Layout::from_counts(&block_counts, local.rank);
+        let dof_counts: Vec<usize> = block_counts.iter().map(|c| 3 * c).collect();
         let dofs = Layout::from_counts(&dof_counts, local.rank);
-        let ghost_dofs: Vec<usize> = local
-            .ghosts
+        // A node's block: its owner's first block plus its place among the owner's nodes.
+        let node_block: Vec<usize> = (0..local.n_local_nodes())
+            .map(|n| {
+                let g = local.global_node(n);
+                let q = nodes.owner(g);
+                blocks.starts[q] + g - nodes.starts[q]
+            })
+            .collect();
+        let ghost_dofs: Vec<usize> = node_block[local.n_owned()..]
             .iter()
-            .flat_map(|&g| (0..3).map(move |c| 3 * g + c))
+            .flat_map(|&b| (0..3).map(move |c| 3 * b + c))
             .collect();
         let halo = HaloPlan::new(comm, &dofs, ghost_dofs);
-        let node_block: Vec<usize> = (0..local.n_local_nodes())
-            .map(|n| local.global_node(n))
-            .collect();
+        let contact = contact::Contact::new(
+            &local.walls,
+            &local.coords,
+            3 * local.n_owned(),
+            blocks.start() + local.n_owned(),
+        );
         let materials: Vec<Box<dyn Material>> =
             local.materials.iter().map(|(_, m)| m.build()).collect();
         let mut state_offset = Vec::with_capacity(local.n_elems() + 1);
@@ -116,7 +136,7 @@ impl Model {
             })
             .collect();
         let n_local_dofs = 3 * local.n_local_nodes();
-        Ok(Self {
+        let mut model = Self {
             materials,
             blocks,
             dofs,
@@ -131,18 +151,55 @@ impl Model {
             work: vec![0.0; n_local_dofs],
             element_evaluations: 0,
             local,
-        })
+            contact,
+        };
+        if comm.all_ok(model.contact.is_empty()) {
+            return Ok(model);
+        }
+        model.set_contact_scales(comm);
+        Ok(model)
     }
 
+    /// κ of every tracked node without a deck value: the mean diagonal entry of its
+    /// block of the stiffness at the reference state (collective: one assembly).
+    fn set_contact_scales(&mut self, comm: &dyn Comm) {
+        let mut k = self.new_matrix(comm);
+        k.zero();
+        let u0 = vec![0.0; 3 * self.local.n_local_nodes()];
+        let old = self.state_new.clone();
+        self.element_pass(&u0, None, Some(&mut k));
+        self.state_new = old;
+        k.finish_assembly(comm);
+        let start = self.blocks.start();
+        let nb = &self.node_block;
+        self.contact.set_kappa(|n| {
+            k.block(nb[n] - start, nb[n])
+                .map(|b| (b[0] + b[4] + b[8]) / 3.0)
+                .unwrap_or(0.0)
+        });
+    }
+
+    /// All unknowns owned here: node dofs, then multipliers.
     pub fn n_owned_dofs(&self) -> usize {
+        3 * self.blocks.owned_len()
+    }
+
+    /// The owned node dofs (the first `3 · n_owned` unknowns of the owned range).
+    pub fn n_node_dofs(&self) -> usize {
         3 * self.local.n_owned()
     }
 
-    /// Owned dofs plus ghost copies, refreshed from their owners.
+    /// Local indices of the owned multiplier unknowns.
+    pub fn multiplier_range(&self) -> std::ops::Range<usize> {
+        self.n_node_dofs()..self.n_owned_dofs()
+    }
+
+    /// Owned node dofs plus ghost copies, refreshed from their owners (multipliers are
+    /// left out: `u_local` is indexed by local node).
     pub fn gather(&self, comm: &dyn Comm, u_owned: &[f64], u_local: &mut Vec<f64>) {
-        let n = u_owned.len();
+        let n = self.n_node_dofs();
         u_local.resize(n + self.halo.n_ghosts(), 0.0);
-        u_local[..n].copy_from_slice(u_owned);
+        u_local[..n].copy_from_slice(&u_owned[..n]);
         let (_, ghosts) = u_local.split_at_mut(n);
         self.halo.forward(comm, u_owned, ghosts);
     }
@@ -210,17 +267,31 @@ impl Model {
         let failure = self.element_pass(&u_local, Some(&mut f_int), None);
         self.external_forces(&u_local, t, &mut f_ext, None);
         // Sum ghost contributions on the owners.
-        let no = u_owned.len();
+        let no = self.n_node_dofs();
         let (own_i, ghost_i) = f_int.split_at_mut(no);
         self.halo.reverse_add(comm, ghost_i, own_i);
         let (own_e, ghost_e) = f_ext.split_at_mut(no);
         self.halo.reverse_add(comm, ghost_e, own_e);
+        f_int_owned.iter_mut().for_each(|x| *x = 0.0);
+        f_ext_owned.iter_mut().for_each(|x| *x = 0.0);
+        f_int_owned[..no].copy_from_slice(own_i);
+        f_ext_owned[..no].copy_from_slice(own_e);
+        // Rigid walls: forces on owned tracked nodes count as external; multiplier rows
+        // (−κ h, zero at a solution) go with the internal forces.
+        self.contact.residual(
+            &self.local.coords,
+            &u_local,
+            u_owned,
+            t,
+            f_ext_owned,
+            f_int_owned,
+            None,
+            &self.node_block,
+        );
         let mut sums = [0.0, 0.0, if failure.is_some() { 1.0 } else { 0.0 }];
-        f_int_owned.copy_from_slice(own_i);
-        f_ext_owned.copy_from_slice(own_e);
-        for i in 0..no {
-            sums[0] += own_i[i] * own_i[i];
-            sums[1] += own_e[i] * own_e[i];
+        for i in 0..f_int_owned.len() {
+            sums[0] += f_int_owned[i] * f_int_owned[i];
+            sums[1] += f_ext_owned[i] * f_ext_owned[i];
         }
         comm.allreduce_sum(&mut sums);
         self.work = u_local;
@@ -416,6 +487,7 @@ impl Model {
                 }
             }
         }
+        pairs.extend(self.contact.pattern(&self.node_block));
         pairs.sort_unstable();
         pairs.dedup();
         DistMatrix::new(comm, self.blocks.clone(), &pairs)
@@ -435,6 +507,18 @@ impl Model {
         let failure = self.element_pass(&u_local, None, Some(k));
         let mut scratch = vec![0.0; u_local.len()];
         self.external_forces(&u_local, t, &mut scratch, Some(k));
+        let mut scratch_f = vec![0.0; u_owned.len()];
+        let mut scratch_r = vec![0.0; u_owned.len()];
+        self.contact.residual(
+            &self.local.coords,
+            &u_local,
+            u_owned,
+            t,
+            &mut scratch_f,
+            &mut scratch_r,
+            Some(k),
+            &self.node_block,
+        );
         k.finish_assembly(comm);
         self.work = u_local;
         if !comm.all_ok(failure.is_none()) {
@@ -449,6 +533,21 @@ impl Model {
     /// Accept the history computed at the last converged evaluation.
     pub fn commit(&mut self) {
         self.state_old.copy_from_slice(&self.state_new);
+        self.contact.commit();
+    }
+
+    /// Explicit runs: put tracked nodes of ALM walls that penetrate back on the wall and
+    /// remove their approach velocity (`v` is the mid-step velocity).
+    pub fn contact_kinematic(&mut self, u: &mut [f64], v: &mut [f64], m: &[f64], t: f64, h: f64) {
+        self.contact.kinematic(&self.local.coords, u, v, m, t, h);
+    }
+
+    /// Wall forces, penetration and contact counts at the last evaluation (collective).
+    pub fn contact_report(&self, comm: &dyn Comm) -> Option<contact::ContactReport> {
+        if self.local.walls.is_empty() {
+            return None;
+        }
+        Some(self.contact.report(comm, self.local.walls.len()))
     }
 
     /// Reaction force on each reaction set: Σ over its owned nodes of r = f_int − f_ext

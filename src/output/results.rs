@@ -25,6 +25,8 @@ pub struct ResultsWriter {
     n_elems: u64,
     node_start: u64,
     elem_start: u64,
+    /// Owned node dofs: the displacement part of an owned unknown vector.
+    n_node_dofs: usize,
     pub seconds: f64,
     pub bytes_written: u64,
 }
@@ -174,6 +176,7 @@ impl ResultsWriter {
             n_elems,
             node_start,
             elem_start,
+            n_node_dofs: model.n_node_dofs(),
             seconds: 0.0,
             bytes_written: 0,
         };
@@ -254,7 +257,7 @@ impl ResultsWriter {
                 self.n_nodes,
                 3,
                 self.node_start,
-                u,
+                &u[..self.n_node_dofs],
             )?;
             let sig = model.stresses(comm, u)?;
             let flat: Vec<f64> = sig.iter().flatten().copied().collect();
@@ -291,7 +294,7 @@ impl ResultsWriter {
                     self.n_nodes,
                     3,
                     self.node_start,
-                    v,
+                    &v[..self.n_node_dofs],
                 )?;
                 self.bytes_written += 8 * v.len() as u64;
             }

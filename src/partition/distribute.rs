@@ -42,6 +42,8 @@ pub struct LocalModel {
     pub constraints: Vec<Constraint>,
     pub loads: Vec<Load>,
     pub reaction_sets: Vec<String>,
+    /// Rigid walls with this rank's owned tracked nodes (local indices).
+    pub walls: Vec<crate::contact::wall::WallDef>,
     pub settings: Settings,
     pub n_nodes_global: usize,
     pub n_elems_global: usize,
@@ -172,6 +174,29 @@ pub fn split(def: &ModelDef, part: &[u32], ranks: usize) -> Vec<LocalModel> {
                 )
             })
             .collect();
+        // Walls: each rank tracks the nodes it owns (contact forces act on the node only).
+        let walls = def
+            .walls
+            .iter()
+            .map(|w| {
+                let mut lw = w.clone();
+                lw.nodes.clear();
+                lw.areas.clear();
+                let mut mine: Vec<(usize, f64)> = w
+                    .nodes
+                    .iter()
+                    .zip(&w.areas)
+                    .filter(|(&n, _)| owner[n] as usize == r)
+                    .map(|(&n, &a)| (local_of[n], a))
+                    .collect();
+                mine.sort_by_key(|p| p.0);
+                for (n, a) in mine {
+                    lw.nodes.push(n);
+                    lw.areas.push(a);
+                }
+                lw
+            })
+            .collect();
         out.push(LocalModel {
             rank: r,
             ranks,
@@ -192,6 +217,7 @@ pub fn split(def: &ModelDef, part: &[u32], ranks: usize) -> Vec<LocalModel> {
             constraints: def.constraints.clone(),
             loads: def.loads.clone(),
             reaction_sets: def.reaction_sets.clone(),
+            walls,
             settings: def.settings.clone(),
             n_nodes_global: mesh.n_nodes(),
             n_elems_global: mesh.n_elems(),

@@ -492,7 +492,22 @@ pub fn build(deck: &Deck, deck_dir: &Path) -> Result<ModelDef> {
         }
     };
 
+    let walls = super::walls::build_walls(
+        &deck.walls,
+        &super::walls::WallInputs {
+            mesh: &mesh,
+            boundary: &boundary,
+            part_names: deck.parts.iter().map(|p| p.name.clone()).collect(),
+            part_nodes: &part_nodes,
+            set_nodes: &set_nodes,
+            curve: &curve,
+            curves: &curves,
+            tol: 1e-8 * diag.max(1e-300),
+        },
+    )?;
+
     Ok(ModelDef {
+        walls,
         mesh,
         part_names: deck.parts.iter().map(|p| p.name.clone()).collect(),
         part_material,

@@ -29,6 +29,9 @@ pub struct Deck {
     /// Initial velocities of dynamic analyses (later entries win where sets overlap).
     #[serde(default)]
     pub initial_velocity: Vec<InitialVelocityDeck>,
+    /// Rigid walls (contact, DESIGN.md "Contact kinds").
+    #[serde(default)]
+    pub walls: Vec<super::walls::WallDeck>,
 }
 
 /// An initial velocity on a part or a node set (exactly one of `part`, `set`).

@@ -4,6 +4,7 @@
 pub mod build;
 pub mod deck;
 mod dynamics;
+pub mod walls;
 
 use crate::{Error, Result};
 use std::path::{Path, PathBuf};

@@ -33,6 +33,7 @@ pub fn try_run_deck(name: &str, text: &str) -> alfe::Result<RunOutcome> {
     let deck = dir.join("deck.toml");
     std::fs::write(&deck, text).unwrap();
     let opts = RunOptions {
+        contact: None,
         target: deck.display().to_string(),
         out: Some(dir.join("out")),
         partitions: dir.join("partitions"),

@@ -320,6 +320,14 @@ impl DistMatrix {
         &self.cols[self.row_ptr[local_row]..self.row_ptr[local_row + 1]]
     }
 
+    /// The 3×3 block (row-major) at owned block row `local_row`, global block column
+    /// `col`, if it is in the pattern.
+    pub fn block(&self, local_row: usize, col: usize) -> Option<&[f64]> {
+        let row = self.cols_of_row(local_row);
+        let k = row.binary_search(&col).ok()? + self.row_ptr[local_row];
+        Some(&self.vals[9 * k..9 * k + 9])
+    }
+
     /// Ghost block columns (sorted global block indices).
     pub fn ghost_blocks(&self) -> &[usize] {
         &self.ghost_blocks

@@ -72,6 +72,11 @@ pub fn run_explicit(
     for &(d, _) in &model.constrained_owned {
         is_c[d] = true;
     }
+    // Contact multipliers are not used: ALM walls act kinematically here.
+    for d in model.multiplier_range() {
+        is_c[d] = true;
+    }
+    model.contact.explicit = true;
 
     let motion = prescribed_motion(model, 0.0, dt);
     state.u = vec![0.0; n];
@@ -88,7 +93,9 @@ pub fn run_explicit(
     tot.seconds_assembly += ta.elapsed().as_secs_f64();
     tot.residual_evaluations += 1;
     for i in 0..n {
-        state.a[i] = (fe[i] - fi[i]) / m[i];
+        if !is_c[i] {
+            state.a[i] = (fe[i] - fi[i]) / m[i];
+        }
     }
     for &(d, _, _, gdd) in &motion {
         state.a[d] = gdd;
@@ -160,6 +167,10 @@ pub fn run_explicit(
         for i in 0..n {
             state.u[i] += du[i];
         }
+        // Rigid walls enforced kinematically: a penetrating node is put back on the wall
+        // and its approach velocity removed (the explicit reference, as LS-DYNA's
+        // *RIGIDWALL in explicit).
+        model.contact_kinematic(&mut state.u, &mut state.v, m, t1, h);
         let ta = Instant::now();
         if let Err(e) = model.forces(comm, &state.u, t1, &mut fi, &mut fe) {
             tot.seconds_assembly += ta.elapsed().as_secs_f64();

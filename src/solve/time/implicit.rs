@@ -164,7 +164,10 @@ pub fn run_implicit(
     model.forces(comm, &state.u, 0.0, &mut fi, &mut fe)?;
     let rhs: Vec<f64> = (0..n).map(|i| fe[i] - fi[i]).collect();
     state.a = vec![0.0; n];
-    let a_pres: Vec<(usize, f64)> = motion.iter().map(|m| (m.0, m.3)).collect();
+    // Contact multipliers carry no mass: their "acceleration" is held at zero.
+    let mults = model.multiplier_range();
+    let mut a_pres: Vec<(usize, f64)> = motion.iter().map(|m| (m.0, m.3)).collect();
+    a_pres.extend(mults.clone().map(|d| (d, 0.0)));
     let mut r = vec![0.0; n];
     let st0 = {
         let mut prob = MassProblem {
@@ -228,6 +231,10 @@ pub fn run_implicit(
         for i in 0..n {
             trial[i] = p.predict(h, state.u[i], state.v[i], state.a[i]);
         }
+        // Multipliers start from their last values (they are not integrated in time).
+        for i in mults.clone() {
+            trial[i] = state.u[i];
+        }
         let stats = {
             let mut prob = StepProblem {
                 model,
@@ -271,6 +278,10 @@ pub fn run_implicit(
             a1[i] = p.acceleration(h, trial[i], state.u[i], state.v[i], state.a[i]);
             v1[i] = p.velocity(h, state.v[i], state.a[i], a1[i]);
             du[i] = trial[i] - state.u[i];
+        }
+        for i in mults.clone() {
+            a1[i] = 0.0;
+            v1[i] = 0.0;
         }
         model.forces(comm, &trial, t1, &mut fi, &mut fe)?;
         tot.residual_evaluations += 1;

@@ -1,0 +1,115 @@
+//! Rigid walls as the model holds them: a shape, its placement and prescribed motion,
+//! friction, the enforcement method and the tracked nodes (node-to-surface, one way,
+//! as the paper's rigid walls).
+
+use super::motion::RigidMotion;
+use super::shape::{Cylinder, FinitePlane, Plane, Prism, Projection, Shape, Sphere};
+use serde::{Deserialize, Serialize};
+
+/// The shape of a wall, as a deck names it.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+pub enum ShapeDef {
+    Plane { display_size: f64 },
+    FinitePlane { lx: f64, ly: f64 },
+    Cylinder { radius: f64, length: f64 },
+    Sphere { radius: f64 },
+    Prism { size: [f64; 3] },
+}
+
+impl ShapeDef {
+    pub fn build(&self) -> Box<dyn Shape> {
+        match *self {
+            ShapeDef::Plane { display_size } => Box::new(Plane { display_size }),
+            ShapeDef::FinitePlane { lx, ly } => Box::new(FinitePlane { lx, ly }),
+            ShapeDef::Cylinder { radius, length } => Box::new(Cylinder { radius, length }),
+            ShapeDef::Sphere { radius } => Box::new(Sphere { radius }),
+            ShapeDef::Prism { size } => Box::new(Prism { size }),
+        }
+    }
+}
+
+/// How a wall's contact is enforced (DESIGN.md, "Contact: the formulation").
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum ContactMethod {
+    /// Augmented Lagrangian: multipliers are unknowns, zero penetration at convergence.
+    #[default]
+    Alm,
+    /// Penalty: force proportional to the penetration.
+    Penalty,
+}
+
+impl ContactMethod {
+    pub fn parse(s: &str) -> Option<Self> {
+        match s {
+            "alm" => Some(Self::Alm),
+            "penalty" => Some(Self::Penalty),
+            _ => None,
+        }
+    }
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Alm => "alm",
+            Self::Penalty => "penalty",
+        }
+    }
+}
+
+/// A rigid wall of the model. `nodes` are global node numbers in a [`crate::model::def::ModelDef`]
+/// and owned local node indices in a [`crate::partition::distribute::LocalModel`].
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct WallDef {
+    pub name: String,
+    pub shape: ShapeDef,
+    pub motion: RigidMotion,
+    /// Coulomb friction coefficient μ.
+    pub friction: f64,
+    pub method: ContactMethod,
+    /// ALM scale κ (force per length); None = from the stiffness at each node.
+    pub kappa: Option<f64>,
+    /// Penalty stiffness as a multiple of the nodal stiffness (LS-DYNA's SLSFAC idea).
+    pub penalty_scale: f64,
+    /// The tracked node set's name (for messages).
+    pub set: String,
+    pub nodes: Vec<usize>,
+    /// Tributary area of each tracked node on the tracked surface (0 where unknown).
+    pub areas: Vec<f64>,
+}
+
+/// A projection in global coordinates.
+#[derive(Debug, Clone, Copy)]
+pub struct WallPoint {
+    pub gap: f64,
+    /// Columns n, t1, t2 (global).
+    pub frame: [[f64; 3]; 3],
+    pub point: [f64; 3],
+    pub hessian: [[f64; 3]; 3],
+    /// Where the wall's material point now at `point` was at the start of the step.
+    pub point_old: [f64; 3],
+}
+
+/// Project a global point onto a wall at time t; `t_old` gives `point_old`.
+pub fn project(
+    shape: &dyn Shape,
+    motion: &RigidMotion,
+    x: [f64; 3],
+    t: f64,
+    t_old: f64,
+) -> Option<WallPoint> {
+    let pose = motion.pose(t);
+    let p: Projection = shape.project(pose.to_local(x))?;
+    let n = pose.dir_to_global(p.normal);
+    let t1 = pose.dir_to_global(p.tangents[0]);
+    let t2 = pose.dir_to_global(p.tangents[1]);
+    let mut frame = [[0.0; 3]; 3];
+    for i in 0..3 {
+        frame[i] = [n[i], t1[i], t2[i]];
+    }
+    Some(WallPoint {
+        gap: p.gap,
+        frame,
+        point: pose.to_global(p.point),
+        hessian: pose.tensor_to_global(p.hessian),
+        point_old: motion.pose(t_old).to_global(p.point),
+    })
+}

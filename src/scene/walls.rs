@@ -1,0 +1,405 @@
+//! `[[walls]]`: rigid walls in a deck (shape, placement, prescribed motion, friction,
+//! ALM or penalty, tracked nodes) turned into [`WallDef`]s, with the checks an analyst
+//! needs: sizes, axes, a tracked set that exists and no tracked node starting inside.
+
+use crate::contact::motion::{MotionKind, RigidMotion, Rotation, Translation};
+use crate::contact::wall::{project, ContactMethod, ShapeDef, WallDef};
+use crate::mesh::{FaceRef, Mesh};
+use crate::model::def::Curve;
+use crate::{Error, Result};
+use serde::{Deserialize, Serialize};
+use std::collections::{BTreeMap, BTreeSet};
+
+/// The shape keyword of a wall.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum ShapeKind {
+    Plane,
+    FinitePlane,
+    Cylinder,
+    Sphere,
+    Prism,
+}
+
+/// A rigid wall. Its local frame: origin `point`, z along `normal` (plane normal,
+/// cylinder axis), x along `x_axis` (made orthogonal to z). Plane and finite plane face
+/// +z; the cylinder is centred on `point`; a prism is a box centred on `point`.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct WallDeck {
+    pub name: String,
+    pub shape: ShapeKind,
+    #[serde(default)]
+    pub point: [f64; 3],
+    #[serde(default = "ez")]
+    pub normal: [f64; 3],
+    #[serde(default)]
+    pub x_axis: Option<[f64; 3]>,
+    /// finite-plane [lx, ly]; prism [lx, ly, lz]; plane [display size].
+    #[serde(default)]
+    pub size: Option<Vec<f64>>,
+    #[serde(default)]
+    pub radius: Option<f64>,
+    /// Cylinder length along its axis.
+    #[serde(default)]
+    pub length: Option<f64>,
+    /// Tracked nodes: a node set or surface name ...
+    #[serde(default)]
+    pub nodes: Option<String>,
+    /// ... or every node on a part's boundary.
+    #[serde(default)]
+    pub part: Option<String>,
+    #[serde(default)]
+    pub friction: f64,
+    #[serde(default)]
+    pub method: ContactMethod,
+    /// ALM scale κ (force/length); default: each node's stiffness diagonal.
+    #[serde(default)]
+    pub kappa: Option<f64>,
+    /// Penalty stiffness / nodal stiffness (default 0.1, LS-DYNA's SLSFAC default).
+    #[serde(default = "d_penalty_scale")]
+    pub penalty_scale: f64,
+    #[serde(default)]
+    pub motion: Option<WallMotionDeck>,
+}
+
+/// Prescribed rigid motion: translation `translation × c(t)` and a rotation by
+/// `angle × c(t)` (radians, right hand) about `axis` through the wall's moving origin;
+/// `type = "velocity"` integrates c instead. Default curves: a ramp 0 → 1 over the
+/// analysis for displacements, the constant 1 for velocities.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct WallMotionDeck {
+    #[serde(default, rename = "type")]
+    pub kind: MotionKind,
+    #[serde(default)]
+    pub translation: Option<[f64; 3]>,
+    #[serde(default)]
+    pub curve: Option<String>,
+    #[serde(default)]
+    pub axis: Option<[f64; 3]>,
+    #[serde(default)]
+    pub angle: Option<f64>,
+    #[serde(default)]
+    pub rotation_curve: Option<String>,
+}
+
+fn ez() -> [f64; 3] {
+    [0.0, 0.0, 1.0]
+}
+fn d_penalty_scale() -> f64 {
+    0.1
+}
+
+fn err(field: impl std::fmt::Display, msg: impl std::fmt::Display) -> Error {
+    Error::input(format!("{field}: {msg}"))
+}
+
+fn norm(a: [f64; 3]) -> f64 {
+    (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt()
+}
+
+fn unit(field: String, a: [f64; 3]) -> Result<[f64; 3]> {
+    let n = norm(a);
+    if !(n > 0.0 && n.is_finite()) {
+        return Err(err(
+            field,
+            format!("expected a non-zero direction, got {a:?}"),
+        ));
+    }
+    Ok([a[0] / n, a[1] / n, a[2] / n])
+}
+
+fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
+
+/// Area of a boundary face (quad: half the diagonals' cross product; triangle: half
+/// the edges').
+fn face_area(x: &[[f64; 3]]) -> f64 {
+    let sub = |a: [f64; 3], b: [f64; 3]| [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
+    match x.len() {
+        4 => 0.5 * norm(cross(sub(x[2], x[0]), sub(x[3], x[1]))),
+        3 => 0.5 * norm(cross(sub(x[1], x[0]), sub(x[2], x[0]))),
+        _ => 0.0,
+    }
+}
+
+/// What a wall needs from the rest of the deck.
+pub struct WallInputs<'a> {
+    pub mesh: &'a Mesh,
+    pub boundary: &'a [FaceRef],
+    pub part_names: Vec<String>,
+    pub part_nodes: &'a [BTreeSet<usize>],
+    pub set_nodes: &'a dyn Fn(String, &str) -> Result<Vec<usize>>,
+    pub curve: &'a dyn Fn(String, &Option<String>) -> Result<Curve>,
+    pub curves: &'a BTreeMap<String, Curve>,
+    /// Tolerance for "starts inside" (a small fraction of the model size).
+    pub tol: f64,
+}
+
+/// Validate and build every `[[walls]]` entry.
+pub fn build_walls(decks: &[WallDeck], inp: &WallInputs) -> Result<Vec<WallDef>> {
+    let mut names = BTreeSet::new();
+    let mut out = Vec::new();
+    for (i, w) in decks.iter().enumerate() {
+        let f = format!("walls[{i}]");
+        if w.name.trim().is_empty() {
+            return Err(err(format!("{f}.name"), "expected a non-empty name"));
+        }
+        if !names.insert(w.name.clone()) {
+            return Err(err(
+                format!("{f}.name"),
+                format!("`{}` is defined twice", w.name),
+            ));
+        }
+        out.push(build_wall(w, &f, inp)?);
+    }
+    Ok(out)
+}
+
+fn positive(field: String, v: Option<f64>, what: &str) -> Result<f64> {
+    match v {
+        Some(x) if x > 0.0 && x.is_finite() => Ok(x),
+        Some(x) => Err(err(field, format!("expected a positive {what}, got {x}"))),
+        None => Err(err(field, format!("missing (the {what} of this shape)"))),
+    }
+}
+
+fn shape_def(w: &WallDeck, f: &str) -> Result<ShapeDef> {
+    let size = |n: usize| -> Result<Vec<f64>> {
+        match &w.size {
+            Some(s) if s.len() == n && s.iter().all(|&x| x > 0.0 && x.is_finite()) => Ok(s.clone()),
+            Some(s) => Err(err(
+                format!("{f}.size"),
+                format!("expected {n} positive lengths, got {s:?}"),
+            )),
+            None => Err(err(
+                format!("{f}.size"),
+                format!("missing ({n} lengths for this shape)"),
+            )),
+        }
+    };
+    let unused = |field: &str, given: bool| -> Result<()> {
+        if given {
+            Err(err(
+                format!("{f}.{field}"),
+                format!("is not a parameter of shape {:?}", w.shape).to_lowercase(),
+            ))
+        } else {
+            Ok(())
+        }
+    };
+    Ok(match w.shape {
+        ShapeKind::Plane => {
+            unused("radius", w.radius.is_some())?;
+            unused("length", w.length.is_some())?;
+            let display_size = match &w.size {
+                None => 0.0,
+                Some(_) => size(1)?[0],
+            };
+            ShapeDef::Plane { display_size }
+        }
+        ShapeKind::FinitePlane => {
+            unused("radius", w.radius.is_some())?;
+            unused("length", w.length.is_some())?;
+            let s = size(2)?;
+            ShapeDef::FinitePlane { lx: s[0], ly: s[1] }
+        }
+        ShapeKind::Prism => {
+            unused("radius", w.radius.is_some())?;
+            unused("length", w.length.is_some())?;
+            let s = size(3)?;
+            ShapeDef::Prism {
+                size: [s[0], s[1], s[2]],
+            }
+        }
+        ShapeKind::Sphere => {
+            unused("size", w.size.is_some())?;
+            unused("length", w.length.is_some())?;
+            ShapeDef::Sphere {
+                radius: positive(format!("{f}.radius"), w.radius, "radius")?,
+            }
+        }
+        ShapeKind::Cylinder => {
+            unused("size", w.size.is_some())?;
+            ShapeDef::Cylinder {
+                radius: positive(format!("{f}.radius"), w.radius, "radius")?,
+                length: positive(format!("{f}.length"), w.length, "length")?,
+            }
+        }
+    })
+}
+
+fn build_wall(w: &WallDeck, f: &str, inp: &WallInputs) -> Result<WallDef> {
+    let mut shape = shape_def(w, f)?;
+    if w.point.iter().any(|x| !x.is_finite()) {
+        return Err(err(format!("{f}.point"), "expected finite numbers"));
+    }
+    let ez = unit(format!("{f}.normal"), w.normal)?;
+    let guess = match w.x_axis {
+        Some(x) => unit(format!("{f}.x_axis"), x)?,
+        None if ez[0].abs() < 0.9 => [1.0, 0.0, 0.0],
+        None => [0.0, 1.0, 0.0],
+    };
+    let d = guess[0] * ez[0] + guess[1] * ez[1] + guess[2] * ez[2];
+    let ex = [
+        guess[0] - d * ez[0],
+        guess[1] - d * ez[1],
+        guess[2] - d * ez[2],
+    ];
+    if norm(ex) < 1e-6 {
+        return Err(err(
+            format!("{f}.x_axis"),
+            "must not be parallel to `normal`",
+        ));
+    }
+    let ex = unit(format!("{f}.x_axis"), ex)?;
+    let ey = cross(ez, ex);
+    if !(w.friction >= 0.0 && w.friction.is_finite()) {
+        return Err(err(
+            format!("{f}.friction"),
+            format!("expected a coefficient ≥ 0, got {}", w.friction),
+        ));
+    }
+    if let Some(k) = w.kappa {
+        if !(k > 0.0 && k.is_finite()) {
+            return Err(err(
+                format!("{f}.kappa"),
+                format!("expected κ > 0, got {k}"),
+            ));
+        }
+    }
+    if !(w.penalty_scale > 0.0 && w.penalty_scale.is_finite()) {
+        return Err(err(
+            format!("{f}.penalty_scale"),
+            format!("expected a positive factor, got {}", w.penalty_scale),
+        ));
+    }
+    // Tracked nodes.
+    let (set, nodes) = match (&w.nodes, &w.part) {
+        (Some(s), None) => (s.clone(), (inp.set_nodes)(format!("{f}.nodes"), s)?),
+        (None, Some(p)) => {
+            let Some(pi) = inp.part_names.iter().position(|q| q == p) else {
+                return Err(err(
+                    format!("{f}.part"),
+                    format!("unknown part `{p}` (parts: {})", inp.part_names.join(", ")),
+                ));
+            };
+            let mut v: BTreeSet<usize> = BTreeSet::new();
+            for fr in inp.boundary {
+                if inp.mesh.elem_part[fr.elem] as usize == pi {
+                    v.extend(inp.mesh.face_nodes(*fr));
+                }
+            }
+            debug_assert!(v.iter().all(|n| inp.part_nodes[pi].contains(n)));
+            (format!("boundary of part {p}"), v.into_iter().collect())
+        }
+        _ => {
+            return Err(err(
+                f,
+                format!("`{}`: expected exactly one of `nodes`, `part`", w.name),
+            ))
+        }
+    };
+    // Tributary areas on the tracked surface: boundary faces whose nodes are all tracked.
+    let tracked: BTreeSet<usize> = nodes.iter().copied().collect();
+    let mut area: BTreeMap<usize, f64> = BTreeMap::new();
+    for fr in inp.boundary {
+        let fnodes = inp.mesh.face_nodes(*fr);
+        if fnodes.iter().all(|n| tracked.contains(n)) {
+            let x: Vec<[f64; 3]> = fnodes.iter().map(|&n| inp.mesh.coords[n]).collect();
+            let a = face_area(&x) / fnodes.len() as f64;
+            for n in fnodes {
+                *area.entry(n).or_default() += a;
+            }
+        }
+    }
+    let areas = nodes
+        .iter()
+        .map(|n| area.get(n).copied().unwrap_or(0.0))
+        .collect();
+    // Motion.
+    let mut motion = RigidMotion {
+        origin: w.point,
+        axes: [ex, ey, ez],
+        translation: None,
+        rotation: None,
+    };
+    if let Some(m) = &w.motion {
+        let mf = format!("{f}.motion");
+        let curve = |field: &str, name: &Option<String>| -> Result<Curve> {
+            match (name, m.kind) {
+                (None, MotionKind::Velocity) => Ok(Curve {
+                    points: vec![[0.0, 1.0]],
+                }),
+                _ => (inp.curve)(format!("{mf}.{field}"), name),
+            }
+        };
+        if let Some(v) = m.translation {
+            if v.iter().any(|x| !x.is_finite()) {
+                return Err(err(format!("{mf}.translation"), "expected finite numbers"));
+            }
+            motion.translation = Some(Translation {
+                kind: m.kind,
+                value: v,
+                curve: curve("curve", &m.curve)?,
+            });
+        } else if m.curve.is_some() {
+            return Err(err(format!("{mf}.curve"), "given without `translation`"));
+        }
+        match (m.axis, m.angle) {
+            (Some(a), Some(angle)) => {
+                motion.rotation = Some(Rotation {
+                    kind: m.kind,
+                    axis: unit(format!("{mf}.axis"), a)?,
+                    angle,
+                    curve: curve("rotation_curve", &m.rotation_curve)?,
+                })
+            }
+            (None, None) => {}
+            _ => return Err(err(&mf, "a rotation needs both `axis` and `angle`")),
+        }
+        let _ = inp.curves;
+    }
+    // A plane without a display size is drawn as large as the model.
+    if let ShapeDef::Plane { display_size } = &mut shape {
+        if *display_size == 0.0 {
+            *display_size = 2e9 * inp.tol;
+        }
+    }
+    let def = WallDef {
+        name: w.name.clone(),
+        shape,
+        motion,
+        friction: w.friction,
+        method: w.method,
+        kappa: w.kappa,
+        penalty_scale: w.penalty_scale,
+        set,
+        nodes,
+        areas,
+    };
+    // No tracked node may start inside the wall: the multiplier/penalty would push it out
+    // with a force nobody asked for.
+    let s = def.shape.build();
+    for &n in &def.nodes {
+        let x = inp.mesh.coords[n];
+        if let Some(p) = project(s.as_ref(), &def.motion, x, 0.0, 0.0) {
+            if p.gap < -inp.tol {
+                return Err(err(
+                    f,
+                    format!(
+                        "wall `{}`: tracked node {n} at ({:.6e}, {:.6e}, {:.6e}) starts {:.3e} inside the {} (initial penetrations are not resolved: move the wall or the part)",
+                        def.name, x[0], x[1], x[2], -p.gap, s.kind()
+                    ),
+                ));
+            }
+        }
+    }
+    Ok(def)
+}
