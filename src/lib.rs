@@ -10,6 +10,7 @@
 pub mod app;
 pub mod bench;
 pub mod bench_residual;
+pub mod contact;
 pub mod error;
 pub mod fem;
 pub mod material;
