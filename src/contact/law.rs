@@ -85,7 +85,7 @@ pub struct PenaltyPoint {
     pub sticking: bool,
 }
 
-/// f_N = k_N max(−g_N, 0); tangentially an elastic stick spring k_T on the slip over the
+/// f_N = k_N max(−g_N, 0) (active for g_N ≤ 0); tangentially an elastic stick spring k_T on the slip over the
 /// step added to the force carried from the last step, returned onto the Coulomb cone
 /// ‖f_T‖ ≤ μ f_N (regularized Coulomb, Wriggers, Computational Contact Mechanics §5.2).
 pub fn penalty(g: [f64; 3], ft_old: [f64; 2], kn: f64, kt: f64, mu: f64) -> PenaltyPoint {
@@ -95,7 +95,9 @@ pub fn penalty(g: [f64; 3], ft_old: [f64; 2], kn: f64, kt: f64, mu: f64) -> Pena
         active: false,
         sticking: false,
     };
-    if g[0] >= 0.0 {
+    // A node exactly on the wall is active (with zero force): its stiffness k_N holds a
+    // body that rests on the wall before any penetration (as ALM's tie rule does).
+    if g[0] > 0.0 {
         return p;
     }
     p.active = true;
