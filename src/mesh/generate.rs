@@ -50,7 +50,7 @@ fn cell_template(kind: ElemKind) -> Vec<Vec<usize>> {
 }
 
 /// Node coordinates along one axis: geometric progression with last/first = `grading`.
-fn axis_coords(origin: f64, size: f64, n: usize, grading: f64) -> Vec<f64> {
+pub(crate) fn axis_coords(origin: f64, size: f64, n: usize, grading: f64) -> Vec<f64> {
     let q = if n > 1 {
         grading.powf(1.0 / (n as f64 - 1.0))
     } else {

@@ -5,6 +5,7 @@
 use super::deck::*;
 use crate::fem::element::{check_reference, Formulation};
 use crate::material::Hardening;
+use crate::mesh::cylinder::{cylinder_mesh, ring_mesh, CylinderSpec, RingSpec};
 use crate::mesh::generate::{box_mesh, distort_interior, BoxSpec};
 use crate::mesh::select::{bounding_box, faces_in_box, nodes_in_box, nodes_of_faces};
 use crate::mesh::{gmsh, ElemKind, FaceRef, Mesh};
@@ -630,6 +631,50 @@ fn part_mesh(m: &MeshDeck, f: &str, part: u32, deck_dir: &Path) -> Result<Mesh> 
                 x[1] = (0..4).map(|i| w[i] * corners[i][1]).sum();
             }
             Ok(mesh)
+        }
+        MeshDeck::Cylinder {
+            radius,
+            length,
+            z0,
+            cells_radial,
+            cells_axial,
+            axial_grading,
+            sector,
+        } => {
+            let spec = CylinderSpec {
+                radius: *radius,
+                length: *length,
+                z0: *z0,
+                cells_radial: *cells_radial,
+                cells_axial: *cells_axial,
+                axial_grading: *axial_grading,
+                quarter: *sector == SectorDeck::Quarter,
+            };
+            spec.check()
+                .map_err(|(field, why)| err(format!("{f}.mesh.{field}"), why))?;
+            Ok(cylinder_mesh(&spec, part))
+        }
+        MeshDeck::Ring {
+            inner_radius,
+            outer_radius,
+            thickness,
+            z0,
+            angles,
+            cells,
+            center,
+        } => {
+            let spec = RingSpec {
+                inner_radius: *inner_radius,
+                outer_radius: *outer_radius,
+                thickness: *thickness,
+                z0: *z0,
+                angles: *angles,
+                cells: *cells,
+                center: *center,
+            };
+            spec.check()
+                .map_err(|(field, why)| err(format!("{f}.mesh.{field}"), why))?;
+            Ok(ring_mesh(&spec, part))
         }
         MeshDeck::Gmsh { file } => {
             let path = if Path::new(file).is_absolute() {

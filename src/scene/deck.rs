@@ -221,9 +221,59 @@ pub enum MeshDeck {
         #[serde(default)]
         element: ElementDeck,
     },
+    /// A solid hex8 cylinder along z, z from `z0` to `z0 + length`: a butterfly
+    /// (O-grid) cross-section, `cells_radial` (≥ 2) cells from the axis to the surface,
+    /// 8⌊cells_radial/2⌋ around. Groups `zmin`, `zmax`, `outer` and, for the x ≥ 0,
+    /// y ≥ 0 `quarter`, `xmin` (x = 0) and `ymin` (y = 0).
+    Cylinder {
+        radius: f64,
+        length: f64,
+        #[serde(default)]
+        z0: f64,
+        cells_radial: usize,
+        cells_axial: usize,
+        /// Last / first cell length along z (geometric); 1 = uniform.
+        #[serde(default = "one_f64")]
+        axial_grading: f64,
+        #[serde(default)]
+        sector: SectorDeck,
+    },
+    /// A hex8 annular sector about `center`, polar angles `angles` = [a0, a1] in degrees
+    /// (a full 360° ring is closed), z from `z0` to `z0 + thickness`; `cells` = [radial,
+    /// circumferential, through-thickness]. Groups `inner`, `outer`, `zmin`, `zmax` and,
+    /// unless closed, `start` (at a0) and `end` (at a1).
+    Ring {
+        inner_radius: f64,
+        outer_radius: f64,
+        thickness: f64,
+        #[serde(default)]
+        z0: f64,
+        #[serde(default = "full_turn")]
+        angles: [f64; 2],
+        cells: [usize; 3],
+        #[serde(default)]
+        center: [f64; 2],
+    },
     /// A Gmsh MSH 4.1 ASCII file (hex8, tet4; physical groups become groups). A
     /// relative path is taken from the deck's directory.
     Gmsh { file: String },
+}
+
+/// How much of a generated cylinder: all of it, or the x ≥ 0, y ≥ 0 quadrant.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum SectorDeck {
+    #[default]
+    Full,
+    Quarter,
+}
+
+fn one_f64() -> f64 {
+    1.0
+}
+
+fn full_turn() -> [f64; 2] {
+    [0.0, 360.0]
 }
 
 fn ones() -> [f64; 3] {
