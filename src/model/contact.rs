@@ -10,6 +10,9 @@ use crate::contact::wall::{project, ContactMethod, WallDef};
 use crate::parallel::Comm;
 use crate::solve::linear::matrix::DistMatrix;
 
+/// Jacobian-only regularization of the multiplier rows (relative to κ).
+const JACOBIAN_REG: f64 = 1e-8;
+
 /// What one tracked node did at the last evaluation.
 #[derive(Debug, Clone, Copy, Default)]
 pub struct NodeContact {
@@ -237,7 +240,13 @@ impl Contact {
                     dfdg[i][k] = -kappa * pt.dh_dg[i][k];
                     let id = if i == k { 1.0 } else { 0.0 };
                     // r_λ = −κ h: ∂/∂λ = −κ ∂h/∂λ, ∂/∂x = −κ ∂h/∂g Pᵀ.
-                    e.k_ll[i][k] = -kappa * pt.dh_dl[i][k];
+                    // A stick or active row has no λ term; where the node's own dof
+                    // along that direction is prescribed (a symmetry plane) the row
+                    // would then be empty. A −10⁻⁸ κ diagonal in the Jacobian only
+                    // (the residual stays exact) keeps the matrix regular; the row's
+                    // residual is then zero, so λ there does not move.
+                    e.k_ll[i][k] =
+                        -kappa * (pt.dh_dl[i][k] + if i == k { JACOBIAN_REG } else { 0.0 });
                     // ∂(κ(λ − h))/∂λ in the frame; mapped to global rows below.
                     e.k_xl[i][k] = kappa * (id - pt.dh_dl[i][k]);
                 }

@@ -51,6 +51,11 @@ pub const BUILTIN: &[(&str, &str, &str)] = &[
         "fixed-free elastic bar released with a uniform axial velocity (implicit dynamics)",
         include_str!("scenes/bar-vibration.toml"),
     ),
+    (
+        "sliding-block",
+        "elastic block pressed on a rigid floor (mu = 0.3), then dragged: stick, then slip at mu N",
+        include_str!("scenes/sliding-block.toml"),
+    ),
 ];
 
 /// The scene `alfe` and `alfe run` use when none is named.

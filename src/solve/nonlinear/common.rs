@@ -183,7 +183,14 @@ impl Monitor {
     ) -> Verdict {
         let small_r = ev.rn <= opts.residual_rtol * ev.f_ref;
         let small_du = it == 0 || self.last_du <= opts.increment_rtol * ev.un;
-        let small_e = it == 0 || self.last_energy <= opts.energy_rtol * self.max_energy;
+        // The energy test is relative to the step's largest correction energy; a step
+        // driven only by prescribed displacements can have zero energy in its first
+        // correction (r_free = 0 at the start), so an energy below what the residual and
+        // increment tolerances allow, |Δu·r| ≤ rtol_r f_ref · rtol_u ‖u‖, also passes.
+        let floor = opts.residual_rtol * ev.f_ref * opts.increment_rtol * ev.un;
+        let small_e = it == 0
+            || self.last_energy <= opts.energy_rtol * self.max_energy
+            || self.last_energy <= floor;
         if small_r && small_du && small_e && ev.gap == 0.0 {
             return Verdict::Converged;
         }
