@@ -30,6 +30,14 @@ pub struct Projection {
 pub trait Shape: std::fmt::Debug + Send + Sync {
     /// Projection of local point x; None where the shape cannot be touched from x (beyond a finite plane's edges, beyond a cylinder's ends).
     fn project(&self, x: [f64; 3]) -> Option<Projection>;
+    /// The projection of a point last seen (at the start of the step) with outward normal
+    /// `hint` (local frame). Only a prism's inside is ambiguous: near an edge the nearest
+    /// face flips between iterates and the contact normal turns by 90°, which made
+    /// Newton cycle; a penetrating node keeps the face it came through.
+    fn project_hinted(&self, x: [f64; 3], hint: Option<[f64; 3]>) -> Option<Projection> {
+        let _ = hint;
+        self.project(x)
+    }
     /// A triangulated surface for output (local frame): vertices and triangles (outward-facing counter-clockwise).
     fn surface(&self) -> (Vec<[f64; 3]>, Vec<[usize; 3]>);
     /// Short kind name: "plane", "finite-plane", "cylinder", "sphere", "prism".
@@ -380,6 +388,32 @@ impl Shape for Prism {
     /// Inside: g = −minᵢ(hᵢ − |xᵢ|) against the nearest face, whose normal is n (ties: the
     /// lowest axis, then the + side at xᵢ = 0, so the answer is deterministic). A point
     /// exactly on the surface takes this branch and gets g = 0 with a face normal.
+    fn project_hinted(&self, x: [f64; 3], hint: Option<[f64; 3]>) -> Option<Projection> {
+        let h = self.half();
+        let inside = (0..3).all(|i| x[i].abs() <= h[i]);
+        match hint {
+            Some(nh) if inside => {
+                // The face whose outward normal is closest to the hint.
+                let a = (0..3)
+                    .max_by(|&i, &j| nh[i].abs().total_cmp(&nh[j].abs()))
+                    .unwrap_or(0);
+                let s = if nh[a] >= 0.0 { 1.0 } else { -1.0 };
+                let depth = h[a] - s * x[a];
+                let mut p = x;
+                p[a] = s * h[a];
+                let (n, t) = face_frame(a, s);
+                Some(Projection {
+                    gap: if depth > 0.0 { -depth } else { 0.0 },
+                    normal: n,
+                    point: p,
+                    tangents: t,
+                    hessian: ZERO3,
+                })
+            }
+            _ => self.project(x),
+        }
+    }
+
     fn project(&self, x: [f64; 3]) -> Option<Projection> {
         let h = self.half();
         let point: [f64; 3] = std::array::from_fn(|i| x[i].clamp(-h[i], h[i]));
@@ -834,6 +868,23 @@ mod tests {
             scale(1.0 / 14f64.sqrt(), [-1.0, 2.0, -3.0]),
             1e-15
         ));
+    }
+
+    #[test]
+    fn prism_inside_keeps_the_hinted_face() {
+        let p = Prism {
+            size: [2.0, 2.0, 2.0],
+        };
+        // Nearer the +x face (depth 0.1) than the +z face (depth 0.2).
+        let x = [0.9, 0.0, 0.8];
+        assert_eq!(p.project(x).unwrap().normal, [1.0, 0.0, 0.0]);
+        let q = p.project_hinted(x, Some([0.1, 0.0, 0.99])).unwrap();
+        assert_eq!(q.normal, [0.0, 0.0, 1.0]);
+        assert!((q.gap + 0.2).abs() < 1e-15);
+        assert_eq!(q.point, [0.9, 0.0, 1.0]);
+        // Outside, the hint changes nothing.
+        let y = [1.5, 0.0, 0.3];
+        assert_eq!(p.project_hinted(y, Some([0.0, 0.0, 1.0])), p.project(y));
     }
 
     #[test]

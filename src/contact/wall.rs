@@ -88,16 +88,26 @@ pub struct WallPoint {
     pub point_old: [f64; 3],
 }
 
-/// Project a global point onto a wall at time t; `t_old` gives `point_old`.
+/// Project a global point onto a wall at time t; `t_old` gives `point_old`; `hint` is
+/// the node's outward normal at the start of the step (global), if it had one.
 pub fn project(
     shape: &dyn Shape,
     motion: &RigidMotion,
     x: [f64; 3],
     t: f64,
     t_old: f64,
+    hint: Option<[f64; 3]>,
 ) -> Option<WallPoint> {
     let pose = motion.pose(t);
-    let p: Projection = shape.project(pose.to_local(x))?;
+    let hint_local = hint.map(|n| {
+        let r = pose.r;
+        [
+            r[0][0] * n[0] + r[1][0] * n[1] + r[2][0] * n[2],
+            r[0][1] * n[0] + r[1][1] * n[1] + r[2][1] * n[2],
+            r[0][2] * n[0] + r[1][2] * n[1] + r[2][2] * n[2],
+        ]
+    });
+    let p: Projection = shape.project_hinted(pose.to_local(x), hint_local)?;
     let n = pose.dir_to_global(p.normal);
     let t1 = pose.dir_to_global(p.tangents[0]);
     let t2 = pose.dir_to_global(p.tangents[1]);

@@ -41,6 +41,10 @@ pub struct WallContact {
     /// Node positions at the start of the step (committed).
     x_old: Vec<[f64; 3]>,
     x_new: Vec<[f64; 3]>,
+    /// Outward normal of each node's projection at the start of the step (the hint that
+    /// keeps a penetrating node on the face it came through) and at the last evaluation.
+    n_old: Vec<Option<[f64; 3]>>,
+    n_new: Vec<Option<[f64; 3]>>,
     /// Penalty tangential force carried over steps (global vector).
     ft_old: Vec<[f64; 3]>,
     ft_new: Vec<[f64; 3]>,
@@ -97,6 +101,7 @@ struct NodeEval {
     k_lx: [[f64; 3]; 3],
     k_ll: [[f64; 3]; 3],
     ft_new: [f64; 3],
+    normal: Option<[f64; 3]>,
 }
 
 impl Contact {
@@ -131,6 +136,8 @@ impl Contact {
                     kappa: vec![d.kappa.unwrap_or(1.0); n],
                     x_old: x0.clone(),
                     x_new: x0,
+                    n_old: vec![None; n],
+                    n_new: vec![None; n],
                     ft_old: vec![[0.0; 3]; n],
                     ft_new: vec![[0.0; 3]; n],
                     last: vec![NodeContact::default(); n],
@@ -197,10 +204,11 @@ impl Contact {
             k_lx: [[0.0; 3]; 3],
             k_ll: [[0.0; 3]; 3],
             ft_new: [0.0; 3],
+            normal: None,
         };
         let kappa = w.kappa[j];
         let alm_wall = w.mult_offset.is_some();
-        let Some(wp) = project(w.shape.as_ref(), &w.def.motion, x, t, self.t_old) else {
+        let Some(wp) = project(w.shape.as_ref(), &w.def.motion, x, t, self.t_old, w.n_old[j]) else {
             // Out of the wall's reach: multipliers driven to zero, no force.
             if alm_wall {
                 for i in 0..3 {
@@ -225,6 +233,7 @@ impl Contact {
             p[0][2] * d[0] + p[1][2] * d[1] + p[2][2] * d[2],
         ];
         e.c.gap = wp.gap;
+        e.normal = Some([p[0][0], p[1][0], p[2][0]]);
         let mu = w.def.friction;
         // f_local (force on the node in the frame), ∂f_local/∂g, and for ALM ∂f/∂λ.
         let (fl, dfdg) = if alm_wall {
@@ -376,6 +385,7 @@ impl Contact {
                 }
                 w.x_new[j] = x;
                 w.ft_new[j] = e.ft_new;
+                w.n_new[j] = e.normal;
                 w.last[j] = e.c;
             }
         }
@@ -413,8 +423,9 @@ impl Contact {
                     gap: f64::NAN,
                     ..NodeContact::default()
                 };
-                if let Some(wp) = project(w.shape.as_ref(), &w.def.motion, x, t, t - h) {
+                if let Some(wp) = project(w.shape.as_ref(), &w.def.motion, x, t, t - h, w.n_old[j]) {
                     c.gap = wp.gap;
+                    w.n_new[j] = Some([wp.frame[0][0], wp.frame[1][0], wp.frame[2][0]]);
                     if wp.gap < 0.0 {
                         let nrm = [wp.frame[0][0], wp.frame[1][0], wp.frame[2][0]];
                         let vw: Vec<f64> = (0..3)
@@ -461,6 +472,7 @@ impl Contact {
         for w in &mut self.walls {
             w.x_old.copy_from_slice(&w.x_new);
             w.ft_old.copy_from_slice(&w.ft_new);
+            w.n_old.copy_from_slice(&w.n_new);
         }
     }
 

@@ -161,8 +161,23 @@ impl Model {
     }
 
     /// κ of every tracked node without a deck value: the mean diagonal entry of its
-    /// block of the stiffness at the reference state (collective: one assembly).
+    /// block of the stiffness at the reference state, scaled from the P-wave modulus
+    /// λ + 2μ that dominates it down to Young's modulus E, by (1 + ν)(1 − 2ν)/(1 − ν)
+    /// (smallest over the node's materials). κ is the augmentation parameter of the
+    /// friction law (γ compares λ_T with the slip g_T); Alart–Curnier-type semi-smooth
+    /// Newton wants it of the order of E·h, and a bulk-dominated κ (rubber: K/G ~ 1000)
+    /// made the stick/slip decisions cycle (collective: one assembly).
     fn set_contact_scales(&mut self, comm: &dyn Comm) {
+        let mut factor = vec![1.0f64; self.local.n_local_nodes()];
+        for e in 0..self.local.n_elems() {
+            let nu = self.local.materials[self.local.elem_material[e] as usize]
+                .1
+                .nu();
+            let f = (1.0 + nu) * (1.0 - 2.0 * nu) / (1.0 - nu);
+            for &n in self.local.elem_nodes(e) {
+                factor[n] = factor[n].min(f);
+            }
+        }
         let mut k = self.new_matrix(comm);
         k.zero();
         let u0 = vec![0.0; 3 * self.local.n_local_nodes()];
@@ -174,7 +189,7 @@ impl Model {
         let nb = &self.node_block;
         self.contact.set_kappa(|n| {
             k.block(nb[n] - start, nb[n])
-                .map(|b| (b[0] + b[4] + b[8]) / 3.0)
+                .map(|b| factor[n] * (b[0] + b[4] + b[8]) / 3.0)
                 .unwrap_or(0.0)
         });
     }

@@ -56,6 +56,11 @@ pub const BUILTIN: &[(&str, &str, &str)] = &[
         "elastic block pressed on a rigid floor (mu = 0.3), then dragged: stick, then slip at mu N",
         include_str!("scenes/sliding-block.toml"),
     ),
+    (
+        "rubber-indent",
+        "prismatic rigid indenter pushed 50 mm into a Mooney-Rivlin rubber block, mu = 0.1 (paper 3.3)",
+        include_str!("scenes/rubber-indent.toml"),
+    ),
 ];
 
 /// The scene `alfe` and `alfe run` use when none is named.

@@ -389,7 +389,7 @@ fn build_wall(w: &WallDeck, f: &str, inp: &WallInputs) -> Result<WallDef> {
     let s = def.shape.build();
     for &n in &def.nodes {
         let x = inp.mesh.coords[n];
-        if let Some(p) = project(s.as_ref(), &def.motion, x, 0.0, 0.0) {
+        if let Some(p) = project(s.as_ref(), &def.motion, x, 0.0, 0.0, None) {
             if p.gap < -inp.tol {
                 return Err(err(
                     f,
