@@ -508,3 +508,105 @@ impl ResultsWriter {
         self.steps.len()
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::contact::{ContactReport, WallReport};
+    use crate::solve::nonlinear::SolveStats;
+    use crate::solve::time::energy::Energies;
+
+    fn record(energies: bool, contact: Option<ContactReport>) -> StepRecord {
+        StepRecord {
+            step: 3,
+            time: 0.75,
+            stats: SolveStats::default(),
+            retries: 0,
+            reactions: vec![[1.0, 2.0, 3.0]],
+            wall_seconds: 0.1,
+            displacements: vec![[0.0; 3], [0.5; 3]],
+            energies: energies.then(Energies::default),
+            contact,
+        }
+    }
+
+    fn cols(s: &str) -> Vec<&str> {
+        s.split(',').collect()
+    }
+
+    #[test]
+    fn history_header_and_rows_have_the_same_columns() {
+        let sets = vec!["top".to_string()];
+        let disp = vec!["a".to_string(), "b".to_string()];
+        // Without walls: no contact columns at all.
+        for dynamic in [false, true] {
+            let h = history_header(&sets, &disp, dynamic, &[]);
+            assert!(!h.contains("max_penetration"), "{h}");
+            let r = history_row(&record(dynamic, None), 0);
+            assert_eq!(cols(&h).len(), cols(&r).len(), "{h}\n{r}");
+        }
+        // Two walls: 9 columns each, then penetration and the two counts, last.
+        let walls = vec!["floor".to_string(), "punch".to_string()];
+        let report = ContactReport {
+            walls: vec![
+                WallReport {
+                    force: [0.0, 0.0, -15.0],
+                    moment: [-7.5, 7.5, 0.0],
+                    displacement: [0.0, 0.0, 0.25],
+                },
+                WallReport::default(),
+            ],
+            max_penetration: 1e-3,
+            active: 9,
+            sticking: 4,
+        };
+        for dynamic in [false, true] {
+            let h = history_header(&sets, &disp, dynamic, &walls);
+            let hc = cols(&h);
+            let n = hc.len();
+            assert_eq!(
+                hc[n - 21..n - 12],
+                [
+                    "floor.fx", "floor.fy", "floor.fz", "floor.mx", "floor.my", "floor.mz",
+                    "floor.ux", "floor.uy", "floor.uz"
+                ]
+            );
+            assert_eq!(hc[n - 12], "punch.fx");
+            assert_eq!(
+                hc[n - 3..],
+                ["max_penetration", "contact_active", "contact_sticking"]
+            );
+            let r = history_row(&record(dynamic, Some(report.clone())), walls.len());
+            let rc = cols(&r);
+            assert_eq!(rc.len(), n, "{h}\n{r}");
+            let at = |name: &str| -> f64 {
+                rc[hc.iter().position(|c| *c == name).unwrap()]
+                    .parse()
+                    .unwrap()
+            };
+            assert_eq!(at("floor.fz"), -15.0);
+            assert_eq!(at("floor.mx"), -7.5);
+            assert_eq!(at("floor.uz"), 0.25);
+            assert_eq!(at("max_penetration"), 1e-3);
+            assert_eq!(at("contact_active"), 9.0);
+            assert_eq!(at("contact_sticking"), 4.0);
+            assert_eq!(at("top.fy"), 2.0);
+            // A record without its report still fills every column.
+            let r = history_row(&record(dynamic, None), walls.len());
+            assert_eq!(cols(&r).len(), n, "{r}");
+            assert!(r.ends_with(",nan,nan,nan"), "{r}");
+        }
+    }
+
+    #[test]
+    fn wall_groups_are_valid_and_unique() {
+        let names: Vec<String> = ["floor", "a/b", "a_b", ".", "floor2"]
+            .iter()
+            .map(|s| s.to_string())
+            .collect();
+        assert_eq!(
+            wall_groups(&names),
+            ["floor", "a_b", "a_b_2", "._3", "floor2"]
+        );
+    }
+}

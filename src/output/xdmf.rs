@@ -566,6 +566,114 @@ print(json.dumps(out))
         let _ = std::fs::remove_dir_all(&dir);
     }
 
+    /// The walls' layout: each step a spatial collection (with the time) of the mesh grid
+    /// and one triangle grid per wall; every DataItem resolved in the HDF5 file.
+    const CHECK_WALLS: &str = r#"
+import sys, os, json, h5py
+import xml.etree.ElementTree as ET
+xmf = sys.argv[1]
+coll = ET.parse(xmf).getroot().find("Domain/Grid")
+out = []
+for g in coll.findall("Grid"):
+    step = {"type": [g.get("GridType"), g.get("CollectionType")],
+            "time": float(g.find("Time").get("Value")), "grids": []}
+    for c in g.findall("Grid"):
+        items = []
+        for d in c.iter("DataItem"):
+            fname, path = d.text.strip().split(":", 1)
+            dims = [int(x) for x in d.get("Dimensions").split()]
+            with h5py.File(os.path.join(os.path.dirname(xmf), fname), "r") as f:
+                ok = list(f[path].shape) == dims
+            items.append([path, ok])
+        step["grids"].append({"name": c.get("Name"), "type": c.get("GridType"),
+            "topology": [c.find("Topology").get("TopologyType"),
+                         int(c.find("Topology").get("NumberOfElements"))],
+            "attrs": [a.get("Name") for a in c.findall("Attribute")],
+            "time": c.find("Time") is not None, "items": items})
+    out.append(step)
+print(json.dumps(out))
+"#;
+
+    #[test]
+    fn walls_make_each_step_a_spatial_collection() {
+        let dir = temp_dir("xdmf-walls");
+        let (n_nodes, n_elems) = (8u64, 1u64);
+        let f = H5File::create(&SerialComm, &dir.join("run.h5")).unwrap();
+        f.write_rows_f64(COORDINATES, n_nodes, 3, 0, &[0.0; 24])
+            .unwrap();
+        f.write_rows_i64(CONNECTIVITY, n_elems, 8, 0, &[0, 1, 2, 3, 4, 5, 6, 7])
+            .unwrap();
+        f.write_rows_i64("/walls/floor/triangles", 2, 3, 0, &[0, 1, 2, 0, 2, 3])
+            .unwrap();
+        let mut wall = XdmfWall {
+            name: "floor".into(),
+            triangles_path: "/walls/floor/triangles".into(),
+            n_triangles: 2,
+            n_points: 4,
+            points_paths: Vec::new(),
+        };
+        let mut steps = Vec::new();
+        for (k, t) in [0.5, 1.0].into_iter().enumerate() {
+            let g = format!("/steps/{:06}", k + 1);
+            f.write_rows_f64(&format!("{g}/displacement"), n_nodes, 3, 0, &[0.0; 24])
+                .unwrap();
+            f.write_rows_f64(&format!("{g}/walls/floor/points"), 4, 3, 0, &[t; 12])
+                .unwrap();
+            wall.points_paths.push(format!("{g}/walls/floor/points"));
+            steps.push(XdmfStep {
+                time: t,
+                attrs: vec![attr(
+                    "displacement",
+                    Center::Node,
+                    AttrKind::Vector,
+                    &format!("{g}/displacement"),
+                    n_nodes,
+                )],
+            });
+        }
+        drop(f);
+        let mesh = XdmfMesh {
+            h5_file_name: "run.h5".into(),
+            n_nodes,
+            n_elems,
+            topology: XdmfTopology::Hexahedron,
+            static_cell_attrs: vec![],
+        };
+        // Without walls the document is the plain one.
+        assert_eq!(
+            xdmf_text_with_walls(&mesh, &steps, &[]).unwrap(),
+            xdmf_text(&mesh, &steps).unwrap()
+        );
+        let xmf = dir.join("run.xmf");
+        write_xdmf_with_walls(&xmf, &mesh, &steps, std::slice::from_ref(&wall)).unwrap();
+        let j = python_json(CHECK_WALLS, &[xmf.to_str().unwrap()]);
+        let j = j.as_array().unwrap();
+        assert_eq!(j.len(), 2);
+        for (k, s) in j.iter().enumerate() {
+            let g = format!("/steps/{:06}", k + 1);
+            assert_eq!(s["type"], serde_json::json!(["Collection", "Spatial"]));
+            assert_eq!(s["time"], [0.5, 1.0][k]);
+            assert_eq!(
+                s["grids"],
+                serde_json::json!([
+                    {"name": "mesh", "type": "Uniform", "topology": ["Hexahedron", 1],
+                     "attrs": ["displacement"], "time": false,
+                     "items": [["/mesh/coordinates", true], ["/mesh/connectivity", true],
+                               [format!("{g}/displacement"), true]]},
+                    {"name": "wall_floor", "type": "Uniform", "topology": ["Triangle", 2],
+                     "attrs": [], "time": false,
+                     "items": [["/walls/floor/triangles", true],
+                               [format!("{g}/walls/floor/points"), true]]}
+                ])
+            );
+        }
+        // A wall must have points for every step.
+        wall.points_paths.pop();
+        let e = xdmf_text_with_walls(&mesh, &steps, &[wall]).unwrap_err();
+        assert!(e.message.contains("points for 1 steps, there are 2"), "{e}");
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
     #[test]
     fn topologies_escaping_and_validation() {
         let mut mesh = XdmfMesh {
