@@ -61,6 +61,13 @@ pub struct Summary {
     pub residual_evaluations: usize,
     pub factorizations: usize,
     pub retries: usize,
+    /// Models with walls: the largest penetration over all steps (≥ 0).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub max_penetration: Option<f64>,
+    /// Models with walls: each wall's force and moment on the wall and its prescribed
+    /// displacement at the last converged step, by wall name.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub walls: Option<std::collections::BTreeMap<String, crate::model::contact::WallReport>>,
     pub wall_time_s: f64,
     /// Wall time by phase (max over ranks): setup, partition, assembly, linear_solve, output.
     pub phases: Phases,
@@ -370,6 +377,7 @@ pub fn run(comm: &dyn Comm, opts: &RunOptions) -> Result<RunOutcome> {
     comm.allreduce_max(&mut ph);
     let rss = comm.allgather_f64(peak_rss_mb());
     let message = totals.failure.clone().unwrap_or_else(|| "converged".into());
+    let (max_penetration, walls) = contact_summary(&model, &records);
     let summary = Summary {
         scene: scene.clone(),
         units: model.local.settings.units.describe().into(),
@@ -396,6 +404,8 @@ pub fn run(comm: &dyn Comm, opts: &RunOptions) -> Result<RunOutcome> {
         residual_evaluations: totals.residual_evaluations,
         factorizations: totals.factorizations,
         retries: totals.retries,
+        max_penetration,
+        walls,
         wall_time_s: t_start.elapsed().as_secs_f64(),
         phases: Phases {
             setup: ph[0],
@@ -439,6 +449,39 @@ pub fn run(comm: &dyn Comm, opts: &RunOptions) -> Result<RunOutcome> {
         model,
         steps: records,
     })
+}
+
+/// The summary's contact entries (None, None for models without walls): the largest
+/// penetration over the steps, and each wall's report at the last step.
+fn contact_summary(
+    model: &Model,
+    records: &[StepRecord],
+) -> (
+    Option<f64>,
+    Option<std::collections::BTreeMap<String, crate::model::contact::WallReport>>,
+) {
+    if model.local.walls.is_empty() {
+        return (None, None);
+    }
+    let pen = records
+        .iter()
+        .filter_map(|r| r.contact.as_ref())
+        .map(|c| c.max_penetration)
+        .fold(0.0, f64::max);
+    let last = records.iter().rev().find_map(|r| r.contact.as_ref());
+    let walls = model
+        .local
+        .walls
+        .iter()
+        .enumerate()
+        .map(|(i, w)| {
+            let rep = last
+                .and_then(|c| c.walls.get(i).copied())
+                .unwrap_or_default();
+            (w.name.clone(), rep)
+        })
+        .collect();
+    (Some(pen), Some(walls))
 }
 
 /// `alfe check`: validate and report the model size and partition quality (serial).

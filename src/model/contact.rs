@@ -22,6 +22,9 @@ pub struct NodeContact {
     pub force: [f64; 3],
     /// Multipliers (λ_N, λ_T1, λ_T2), lengths (zero for penalty).
     pub lambda: [f64; 3],
+    /// Normal component of `force` (along the wall's outward normal; > 0 pushes the
+    /// node out of the wall).
+    pub normal_force: f64,
     pub active: bool,
     pub sticking: bool,
 }
@@ -67,6 +70,21 @@ pub struct ContactReport {
     pub max_penetration: f64,
     pub active: usize,
     pub sticking: usize,
+}
+
+/// Nodal contact fields of the owned nodes at the last evaluation (for output).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct ContactFields {
+    /// Smallest gap over the walls tracking the node; NaN where no wall tracks it or
+    /// none can reach it.
+    pub gap: Vec<f64>,
+    /// Σ over walls of the normal force / the node's tributary area (0 where the area
+    /// is 0 or no wall tracks the node).
+    pub pressure: Vec<f64>,
+    /// Σ over walls of the force on the node, 3 per node (global).
+    pub force: Vec<f64>,
+    /// λ of the first ALM wall tracking the node, 3 per node (0 elsewhere).
+    pub lambda: Vec<f64>,
 }
 
 /// All walls on this rank.
@@ -287,6 +305,7 @@ impl Contact {
             e.r_node[i] = -f[i];
         }
         e.c.force = f;
+        e.c.normal_force = fl[0];
         // ∂r_node/∂x = −P (∂f/∂g) Pᵀ − f_N H (the normal turns with x on curved walls;
         // the tangents' turning is left out).
         let mut a = [[0.0; 3]; 3];
@@ -452,6 +471,8 @@ impl Contact {
                             v[3 * n + i] += dv[i];
                             c.force[i] = m[3 * n + i] * dv[i] / h;
                         }
+                        c.normal_force =
+                            c.force[0] * nrm[0] + c.force[1] * nrm[1] + c.force[2] * nrm[2];
                         c.gap = 0.0;
                         c.active = true;
                     }
@@ -523,6 +544,42 @@ impl Contact {
             active: s[6 * n_walls_global] as usize,
             sticking: s[6 * n_walls_global + 1] as usize,
         }
+    }
+}
+
+impl Contact {
+    /// Gap, pressure, force and multipliers of the first `n_owned` local nodes at the
+    /// last evaluation (local, no communication).
+    pub fn nodal_fields(&self, n_owned: usize) -> ContactFields {
+        let mut f = ContactFields {
+            gap: vec![f64::NAN; n_owned],
+            pressure: vec![0.0; n_owned],
+            force: vec![0.0; 3 * n_owned],
+            lambda: vec![0.0; 3 * n_owned],
+        };
+        let mut has_lambda = vec![false; n_owned];
+        for w in &self.walls {
+            for (j, (&n, c)) in w.def.nodes.iter().zip(&w.last).enumerate() {
+                if n >= n_owned {
+                    continue;
+                }
+                if !c.gap.is_nan() && (f.gap[n].is_nan() || c.gap < f.gap[n]) {
+                    f.gap[n] = c.gap;
+                }
+                let area = w.def.areas.get(j).copied().unwrap_or(0.0);
+                if area > 0.0 {
+                    f.pressure[n] += c.normal_force / area;
+                }
+                for i in 0..3 {
+                    f.force[3 * n + i] += c.force[i];
+                }
+                if w.mult_offset.is_some() && !has_lambda[n] {
+                    has_lambda[n] = true;
+                    f.lambda[3 * n..3 * n + 3].copy_from_slice(&c.lambda);
+                }
+            }
+        }
+        f
     }
 }
 

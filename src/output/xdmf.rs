@@ -176,31 +176,108 @@ fn check_attr(mesh: &XdmfMesh, a: &XdmfAttr) -> Result<()> {
     Ok(())
 }
 
-fn attribute(out: &mut String, h5: &str, a: &XdmfAttr) {
+/// One attribute, indented by `pad` more than a grid directly in the time series.
+fn attribute(out: &mut String, pad: &str, h5: &str, a: &XdmfAttr) {
     let center = match a.center {
         Center::Node => "Node",
         Center::Cell => "Cell",
     };
     let _ = writeln!(
         out,
-        "        <Attribute Name=\"{}\" AttributeType=\"{}\" Center=\"{center}\">",
+        "{pad}        <Attribute Name=\"{}\" AttributeType=\"{}\" Center=\"{center}\">",
         esc(&a.name),
         a.kind.xdmf()
     );
     data_item(
         out,
-        "          ",
+        &format!("{pad}          "),
         h5,
         &a.h5_path,
         &dims(a.n_rows, a.n_cols),
         a.number_type,
         a.precision,
     );
-    out.push_str("        </Attribute>\n");
+    let _ = writeln!(out, "{pad}        </Attribute>");
+}
+
+/// A rigid wall drawn beside the mesh: a triangulated surface (connectivity written
+/// once) whose points are written at every output step, as it moves.
+#[derive(Debug, Clone, PartialEq)]
+pub struct XdmfWall {
+    pub name: String,
+    /// HDF5 path of the triangles, i64 `(n_triangles, 3)`, 0-based into the points.
+    pub triangles_path: String,
+    pub n_triangles: u64,
+    pub n_points: u64,
+    /// HDF5 path of the points, f64 `(n_points, 3)`, of each step (same order as the steps).
+    pub points_paths: Vec<String>,
 }
 
 /// The whole XDMF document for `steps` (pure: no I/O).
 pub fn xdmf_text(mesh: &XdmfMesh, steps: &[XdmfStep]) -> Result<String> {
+    xdmf_text_with_walls(mesh, steps, &[])
+}
+
+/// The mesh grid of one step, indented by `pad` more than a grid directly in the time
+/// series; `time` is written inside it when given.
+fn mesh_grid(
+    out: &mut String,
+    pad: &str,
+    name: &str,
+    time: Option<f64>,
+    mesh: &XdmfMesh,
+    s: &XdmfStep,
+) {
+    let h5 = mesh.h5_file_name.as_str();
+    let (topo_type, topo_dims) = match mesh.topology {
+        XdmfTopology::Hexahedron => ("Hexahedron", dims(mesh.n_elems, 8)),
+        XdmfTopology::Tetrahedron => ("Tetrahedron", dims(mesh.n_elems, 4)),
+        XdmfTopology::Mixed { n_entries } => ("Mixed", dims(n_entries, 1)),
+    };
+    let inner = format!("{pad}          ");
+    let _ = writeln!(
+        out,
+        "{pad}      <Grid Name=\"{}\" GridType=\"Uniform\">",
+        esc(name)
+    );
+    if let Some(t) = time {
+        let _ = writeln!(out, "{pad}        <Time Value=\"{t:?}\"/>");
+    }
+    let _ = writeln!(out, "{pad}        <Geometry GeometryType=\"XYZ\">");
+    data_item(
+        out,
+        &inner,
+        h5,
+        COORDINATES,
+        &dims(mesh.n_nodes, 3),
+        "Float",
+        8,
+    );
+    let _ = writeln!(out, "{pad}        </Geometry>");
+    let _ = writeln!(
+        out,
+        "{pad}        <Topology TopologyType=\"{topo_type}\" NumberOfElements=\"{}\">",
+        mesh.n_elems
+    );
+    data_item(out, &inner, h5, CONNECTIVITY, &topo_dims, "Int", 8);
+    let _ = writeln!(out, "{pad}        </Topology>");
+    for a in &mesh.static_cell_attrs {
+        attribute(out, pad, h5, a);
+    }
+    for a in &s.attrs {
+        attribute(out, pad, h5, a);
+    }
+    let _ = writeln!(out, "{pad}      </Grid>");
+}
+
+/// [`xdmf_text`] with rigid walls: each step becomes a spatial collection of the mesh
+/// grid and one triangle grid per wall at that step's position. Without walls the
+/// document is exactly [`xdmf_text`]'s (one uniform grid per step).
+pub fn xdmf_text_with_walls(
+    mesh: &XdmfMesh,
+    steps: &[XdmfStep],
+    walls: &[XdmfWall],
+) -> Result<String> {
     for a in mesh
         .static_cell_attrs
         .iter()
@@ -214,12 +291,26 @@ pub fn xdmf_text(mesh: &XdmfMesh, steps: &[XdmfStep]) -> Result<String> {
             s.time
         )));
     }
+    for w in walls {
+        if w.points_paths.len() != steps.len() {
+            return Err(Error::runtime(format!(
+                "XDMF wall '{}': points for {} steps, there are {}",
+                w.name,
+                w.points_paths.len(),
+                steps.len()
+            )));
+        }
+        if w.name.is_empty()
+            || !w.triangles_path.starts_with('/')
+            || w.points_paths.iter().any(|p| !p.starts_with('/'))
+        {
+            return Err(Error::runtime(format!(
+                "XDMF wall '{}': empty name or relative HDF5 path",
+                w.name
+            )));
+        }
+    }
     let h5 = mesh.h5_file_name.as_str();
-    let (topo_type, topo_dims) = match mesh.topology {
-        XdmfTopology::Hexahedron => ("Hexahedron", dims(mesh.n_elems, 8)),
-        XdmfTopology::Tetrahedron => ("Tetrahedron", dims(mesh.n_elems, 4)),
-        XdmfTopology::Mixed { n_entries } => ("Mixed", dims(n_entries, 1)),
-    };
     let mut out = String::new();
     out.push_str("<?xml version=\"1.0\" encoding=\"utf-8\"?>\n");
     out.push_str("<!DOCTYPE Xdmf SYSTEM \"Xdmf.dtd\" []>\n");
@@ -229,42 +320,50 @@ pub fn xdmf_text(mesh: &XdmfMesh, steps: &[XdmfStep]) -> Result<String> {
         "    <Grid Name=\"TimeSeries\" GridType=\"Collection\" CollectionType=\"Temporal\">\n",
     );
     for (i, s) in steps.iter().enumerate() {
+        let name = format!("step_{i:06}");
+        if walls.is_empty() {
+            mesh_grid(&mut out, "", &name, Some(s.time), mesh, s);
+            continue;
+        }
         let _ = writeln!(
             out,
-            "      <Grid Name=\"step_{i:06}\" GridType=\"Uniform\">"
+            "      <Grid Name=\"{name}\" GridType=\"Collection\" CollectionType=\"Spatial\">"
         );
         let _ = writeln!(out, "        <Time Value=\"{:?}\"/>", s.time);
-        out.push_str("        <Geometry GeometryType=\"XYZ\">\n");
-        data_item(
-            &mut out,
-            "          ",
-            h5,
-            COORDINATES,
-            &dims(mesh.n_nodes, 3),
-            "Float",
-            8,
-        );
-        out.push_str("        </Geometry>\n");
-        let _ = writeln!(
-            out,
-            "        <Topology TopologyType=\"{topo_type}\" NumberOfElements=\"{}\">",
-            mesh.n_elems
-        );
-        data_item(
-            &mut out,
-            "          ",
-            h5,
-            CONNECTIVITY,
-            &topo_dims,
-            "Int",
-            8,
-        );
-        out.push_str("        </Topology>\n");
-        for a in &mesh.static_cell_attrs {
-            attribute(&mut out, h5, a);
-        }
-        for a in &s.attrs {
-            attribute(&mut out, h5, a);
+        mesh_grid(&mut out, "  ", "mesh", None, mesh, s);
+        for w in walls {
+            let _ = writeln!(
+                out,
+                "        <Grid Name=\"wall_{}\" GridType=\"Uniform\">",
+                esc(&w.name)
+            );
+            let _ = writeln!(
+                out,
+                "          <Topology TopologyType=\"Triangle\" NumberOfElements=\"{}\">",
+                w.n_triangles
+            );
+            data_item(
+                &mut out,
+                "            ",
+                h5,
+                &w.triangles_path,
+                &dims(w.n_triangles, 3),
+                "Int",
+                8,
+            );
+            out.push_str("          </Topology>\n");
+            out.push_str("          <Geometry GeometryType=\"XYZ\">\n");
+            data_item(
+                &mut out,
+                "            ",
+                h5,
+                &w.points_paths[i],
+                &dims(w.n_points, 3),
+                "Float",
+                8,
+            );
+            out.push_str("          </Geometry>\n");
+            out.push_str("        </Grid>\n");
         }
         out.push_str("      </Grid>\n");
     }
@@ -276,7 +375,17 @@ pub fn xdmf_text(mesh: &XdmfMesh, steps: &[XdmfStep]) -> Result<String> {
 /// the steps so far. Called by rank 0 after each output step, so that a run that
 /// stops early still leaves a valid file describing what was written.
 pub fn write_xdmf(path: &Path, mesh: &XdmfMesh, steps: &[XdmfStep]) -> Result<()> {
-    let text = xdmf_text(mesh, steps)?;
+    write_xdmf_with_walls(path, mesh, steps, &[])
+}
+
+/// [`write_xdmf`] with rigid walls drawn beside the mesh ([`xdmf_text_with_walls`]).
+pub fn write_xdmf_with_walls(
+    path: &Path,
+    mesh: &XdmfMesh,
+    steps: &[XdmfStep],
+    walls: &[XdmfWall],
+) -> Result<()> {
+    let text = xdmf_text_with_walls(mesh, steps, walls)?;
     let name = path
         .file_name()
         .ok_or_else(|| Error::runtime(format!("XDMF path {} has no file name", path.display())))?;
@@ -454,6 +563,114 @@ print(json.dumps(out))
                 ])
             );
         }
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    /// The walls' layout: each step a spatial collection (with the time) of the mesh grid
+    /// and one triangle grid per wall; every DataItem resolved in the HDF5 file.
+    const CHECK_WALLS: &str = r#"
+import sys, os, json, h5py
+import xml.etree.ElementTree as ET
+xmf = sys.argv[1]
+coll = ET.parse(xmf).getroot().find("Domain/Grid")
+out = []
+for g in coll.findall("Grid"):
+    step = {"type": [g.get("GridType"), g.get("CollectionType")],
+            "time": float(g.find("Time").get("Value")), "grids": []}
+    for c in g.findall("Grid"):
+        items = []
+        for d in c.iter("DataItem"):
+            fname, path = d.text.strip().split(":", 1)
+            dims = [int(x) for x in d.get("Dimensions").split()]
+            with h5py.File(os.path.join(os.path.dirname(xmf), fname), "r") as f:
+                ok = list(f[path].shape) == dims
+            items.append([path, ok])
+        step["grids"].append({"name": c.get("Name"), "type": c.get("GridType"),
+            "topology": [c.find("Topology").get("TopologyType"),
+                         int(c.find("Topology").get("NumberOfElements"))],
+            "attrs": [a.get("Name") for a in c.findall("Attribute")],
+            "time": c.find("Time") is not None, "items": items})
+    out.append(step)
+print(json.dumps(out))
+"#;
+
+    #[test]
+    fn walls_make_each_step_a_spatial_collection() {
+        let dir = temp_dir("xdmf-walls");
+        let (n_nodes, n_elems) = (8u64, 1u64);
+        let f = H5File::create(&SerialComm, &dir.join("run.h5")).unwrap();
+        f.write_rows_f64(COORDINATES, n_nodes, 3, 0, &[0.0; 24])
+            .unwrap();
+        f.write_rows_i64(CONNECTIVITY, n_elems, 8, 0, &[0, 1, 2, 3, 4, 5, 6, 7])
+            .unwrap();
+        f.write_rows_i64("/walls/floor/triangles", 2, 3, 0, &[0, 1, 2, 0, 2, 3])
+            .unwrap();
+        let mut wall = XdmfWall {
+            name: "floor".into(),
+            triangles_path: "/walls/floor/triangles".into(),
+            n_triangles: 2,
+            n_points: 4,
+            points_paths: Vec::new(),
+        };
+        let mut steps = Vec::new();
+        for (k, t) in [0.5, 1.0].into_iter().enumerate() {
+            let g = format!("/steps/{:06}", k + 1);
+            f.write_rows_f64(&format!("{g}/displacement"), n_nodes, 3, 0, &[0.0; 24])
+                .unwrap();
+            f.write_rows_f64(&format!("{g}/walls/floor/points"), 4, 3, 0, &[t; 12])
+                .unwrap();
+            wall.points_paths.push(format!("{g}/walls/floor/points"));
+            steps.push(XdmfStep {
+                time: t,
+                attrs: vec![attr(
+                    "displacement",
+                    Center::Node,
+                    AttrKind::Vector,
+                    &format!("{g}/displacement"),
+                    n_nodes,
+                )],
+            });
+        }
+        drop(f);
+        let mesh = XdmfMesh {
+            h5_file_name: "run.h5".into(),
+            n_nodes,
+            n_elems,
+            topology: XdmfTopology::Hexahedron,
+            static_cell_attrs: vec![],
+        };
+        // Without walls the document is the plain one.
+        assert_eq!(
+            xdmf_text_with_walls(&mesh, &steps, &[]).unwrap(),
+            xdmf_text(&mesh, &steps).unwrap()
+        );
+        let xmf = dir.join("run.xmf");
+        write_xdmf_with_walls(&xmf, &mesh, &steps, std::slice::from_ref(&wall)).unwrap();
+        let j = python_json(CHECK_WALLS, &[xmf.to_str().unwrap()]);
+        let j = j.as_array().unwrap();
+        assert_eq!(j.len(), 2);
+        for (k, s) in j.iter().enumerate() {
+            let g = format!("/steps/{:06}", k + 1);
+            assert_eq!(s["type"], serde_json::json!(["Collection", "Spatial"]));
+            assert_eq!(s["time"], [0.5, 1.0][k]);
+            assert_eq!(
+                s["grids"],
+                serde_json::json!([
+                    {"name": "mesh", "type": "Uniform", "topology": ["Hexahedron", 1],
+                     "attrs": ["displacement"], "time": false,
+                     "items": [["/mesh/coordinates", true], ["/mesh/connectivity", true],
+                               [format!("{g}/displacement"), true]]},
+                    {"name": "wall_floor", "type": "Uniform", "topology": ["Triangle", 2],
+                     "attrs": [], "time": false,
+                     "items": [["/walls/floor/triangles", true],
+                               [format!("{g}/walls/floor/points"), true]]}
+                ])
+            );
+        }
+        // A wall must have points for every step.
+        wall.points_paths.pop();
+        let e = xdmf_text_with_walls(&mesh, &steps, &[wall]).unwrap_err();
+        assert!(e.message.contains("points for 1 steps, there are 2"), "{e}");
         let _ = std::fs::remove_dir_all(&dir);
     }
 

@@ -40,6 +40,8 @@ pub struct StepRecord {
     pub displacements: Vec<[f64; 3]>,
     /// Energies of dynamic runs (None for static ones).
     pub energies: Option<crate::solve::time::energy::Energies>,
+    /// Wall forces, penetration and contact counts (None for models without walls).
+    pub contact: Option<crate::model::contact::ContactReport>,
 }
 
 /// Totals over the run.
@@ -174,6 +176,7 @@ pub fn run_static(
                 &model.local.settings.output.displacements,
             ),
             energies: None,
+            contact: model.contact_report(comm),
         };
         on_step(&rec, u, model)?;
         if easy && retries == 0 {

@@ -119,6 +119,7 @@ pub fn run_explicit(
             wall_seconds: t0.elapsed().as_secs_f64(),
             displacements: model.mean_displacements(comm, &state.u, &disp_sets),
             energies: Some(energy.current),
+            contact: model.contact_report(comm),
         },
         state,
         model,
@@ -204,6 +205,7 @@ pub fn run_explicit(
             wall_seconds: t0.elapsed().as_secs_f64(),
             displacements: model.mean_displacements(comm, &state.u, &disp_sets),
             energies: Some(en),
+            contact: model.contact_report(comm),
         };
         on_step(&rec, state, model)?;
         t = t1;

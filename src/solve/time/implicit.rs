@@ -209,6 +209,7 @@ pub fn run_implicit(
             wall_seconds: t_start.elapsed().as_secs_f64(),
             displacements: model.mean_displacements(comm, &state.u, &disp_sets),
             energies: Some(energy.current),
+            contact: model.contact_report(comm),
         },
         state,
         model,
@@ -307,6 +308,7 @@ pub fn run_implicit(
             wall_seconds: t0.elapsed().as_secs_f64(),
             displacements: model.mean_displacements(comm, &state.u, &disp_sets),
             energies: Some(en),
+            contact: model.contact_report(comm),
         };
         on_step(&rec, state, model)?;
         if easy && retries == 0 {
