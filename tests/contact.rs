@@ -13,7 +13,9 @@ fn jacobian_fd_error(out: &mut alfe::app::RunOutcome, seed: u64, amp: f64) -> f6
     let n = out.u.len();
     let mut s = seed;
     let mut rnd = || {
-        s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        s = s
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
         ((s >> 11) as f64 / (1u64 << 53) as f64) - 0.5
     };
     let u: Vec<f64> = out.u.iter().map(|&x| x + amp * rnd()).collect();
@@ -48,7 +50,11 @@ fn jacobian_fd_error(out: &mut alfe::app::RunOutcome, seed: u64, amp: f64) -> f6
 fn small_sliding_block(method: &str) -> String {
     let d = builtin("sliding-block");
     let d = edit(&d, "cells = [8, 4, 4]", "cells = [2, 1, 1]");
-    edit(&d, "friction = 0.3", &format!("friction = 0.3\nmethod = \"{method}\""))
+    edit(
+        &d,
+        "friction = 0.3",
+        &format!("friction = 0.3\nmethod = \"{method}\""),
+    )
 }
 
 #[test]
@@ -58,7 +64,10 @@ fn contact_jacobian_matches_finite_differences() {
         for (seed, amp) in [(1, 1e-4), (2, 1e-3), (3, 1e-2)] {
             let err = jacobian_fd_error(&mut out, seed, amp);
             eprintln!("{method} seed {seed} amp {amp}: {err:e}");
-            assert!(err < 1e-6, "{method}: Jacobian off by {err:e} (seed {seed})");
+            assert!(
+                err < 1e-6,
+                "{method}: Jacobian off by {err:e} (seed {seed})"
+            );
         }
     }
 }

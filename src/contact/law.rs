@@ -4,6 +4,9 @@
 //! are lengths; the caller scales by κ. Derivatives are the generalized (semi-smooth)
 //! Jacobian used by Newton and by the preconditioners.
 
+// Index loops over 3×3 frames read like the formulas.
+#![allow(clippy::needless_range_loop)]
+
 /// h(g, λ) of one node with its generalized derivatives. g = (g_N, g_T1, g_T2): the
 /// normal gap and the tangential slip over the step; λ = (λ_N, λ_T1, λ_T2).
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -3,6 +3,9 @@
 //! current origin, each given as a displacement or as a velocity (integrated exactly:
 //! curves are piecewise linear).
 
+// Index loops over 3×3 frames read like the formulas.
+#![allow(clippy::needless_range_loop)]
+
 use crate::model::def::Curve;
 use serde::{Deserialize, Serialize};
 

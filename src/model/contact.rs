@@ -4,6 +4,9 @@
 //! the generalized Jacobian blocks go into the distributed matrix. Wall reactions are
 //! summed over ranks with one reduction.
 
+// Index loops over 3×3 frames read like the formulas.
+#![allow(clippy::needless_range_loop)]
+
 use crate::contact::law::{alm, penalty};
 use crate::contact::shape::Shape;
 use crate::contact::wall::{project, ContactMethod, WallDef};
@@ -226,7 +229,14 @@ impl Contact {
         };
         let kappa = w.kappa[j];
         let alm_wall = w.mult_offset.is_some();
-        let Some(wp) = project(w.shape.as_ref(), &w.def.motion, x, t, self.t_old, w.n_old[j]) else {
+        let Some(wp) = project(
+            w.shape.as_ref(),
+            &w.def.motion,
+            x,
+            t,
+            self.t_old,
+            w.n_old[j],
+        ) else {
             // Out of the wall's reach: multipliers driven to zero, no force.
             if alm_wall {
                 for i in 0..3 {
@@ -350,6 +360,7 @@ impl Contact {
     /// as external force: it receives the force on the node), multiplier rows read from
     /// and written to `u_owned`/`r_mult` by local dof index. Also keeps each node's
     /// state for reporting and the commit.
+    #[allow(clippy::too_many_arguments)]
     pub fn residual(
         &mut self,
         coords: &[[f64; 3]],
@@ -442,7 +453,8 @@ impl Contact {
                     gap: f64::NAN,
                     ..NodeContact::default()
                 };
-                if let Some(wp) = project(w.shape.as_ref(), &w.def.motion, x, t, t - h, w.n_old[j]) {
+                if let Some(wp) = project(w.shape.as_ref(), &w.def.motion, x, t, t - h, w.n_old[j])
+                {
                     c.gap = wp.gap;
                     w.n_new[j] = Some([wp.frame[0][0], wp.frame[1][0], wp.frame[2][0]]);
                     if wp.gap < 0.0 {

@@ -140,7 +140,10 @@ pub fn run_static(
         tot.seconds_linear += stats.seconds_linear;
         if !stats.converged {
             if std::env::var("ALFE_DEBUG").is_ok() {
-                eprintln!("DEBUG failed step t={t}: {:?} {}", stats.residual_history, stats.reason);
+                eprintln!(
+                    "DEBUG failed step t={t}: {:?} {}",
+                    stats.residual_history, stats.reason
+                );
             }
             let tried = t - t_done;
             dt = 0.5 * tried;
