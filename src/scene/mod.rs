@@ -61,6 +61,11 @@ pub const BUILTIN: &[(&str, &str, &str)] = &[
         "prismatic rigid indenter pushed 50 mm into a Mooney-Rivlin rubber block, mu = 0.1 (paper 3.3)",
         include_str!("scenes/rubber-indent.toml"),
     ),
+    (
+        "taylor-bar",
+        "copper bar at 227 m/s onto a rigid wall: implicit dynamics, ALM (paper 3.1)",
+        include_str!("scenes/taylor-bar.toml"),
+    ),
 ];
 
 /// The scene `alfe` and `alfe run` use when none is named.
