@@ -499,6 +499,35 @@ impl Contact {
         }
     }
 
+    /// Persistency of contact in implicit dynamics (Laursen & Chawla 1997): for each node
+    /// in contact at the last evaluation (active, pressed: normal force > 0), the normal
+    /// component of its velocity relative to the wall is set to zero and its normal
+    /// acceleration to the wall's (zero for walls moving at constant speed). The impact's
+    /// normal kinetic energy of these nodes is dissipated, as in a perfectly inelastic
+    /// node-wall impact.
+    pub fn persistency(&self, v: &mut [f64], a: &mut [f64], t: f64, h: f64) {
+        for w in &self.walls {
+            for (j, &n) in w.def.nodes.iter().enumerate() {
+                let c = &w.last[j];
+                if !(c.active && c.normal_force > 0.0) {
+                    continue;
+                }
+                let Some(nrm) = w.n_new[j] else { continue };
+                let pose = w.def.motion.pose(t);
+                let local = pose.to_local(w.x_new[j]);
+                let before = w.def.motion.pose(t - h).to_global(local);
+                let x = w.x_new[j];
+                let vw: Vec<f64> = (0..3).map(|i| (x[i] - before[i]) / h).collect();
+                let vn: f64 = (0..3).map(|i| (v[3 * n + i] - vw[i]) * nrm[i]).sum();
+                let an: f64 = (0..3).map(|i| a[3 * n + i] * nrm[i]).sum();
+                for i in 0..3 {
+                    v[3 * n + i] -= vn * nrm[i];
+                    a[3 * n + i] -= an * nrm[i];
+                }
+            }
+        }
+    }
+
     /// The last evaluation becomes the start of the next step.
     pub fn commit(&mut self) {
         self.t_old = self.t_new;

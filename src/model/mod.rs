@@ -557,6 +557,12 @@ impl Model {
         self.contact.kinematic(&self.local.coords, u, v, m, t, h);
     }
 
+    /// Implicit dynamics after a converged step: tracked nodes pressed against a wall get
+    /// the wall's normal velocity and acceleration (owned dofs; no communication).
+    pub fn contact_persistency(&self, v: &mut [f64], a: &mut [f64], t: f64, h: f64) {
+        self.contact.persistency(v, a, t, h);
+    }
+
     /// Wall forces, penetration and contact counts at the last evaluation (collective).
     pub fn contact_report(&self, comm: &dyn Comm) -> Option<contact::ContactReport> {
         if self.local.walls.is_empty() {

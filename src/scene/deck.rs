@@ -426,6 +426,8 @@ pub enum SchemeKind {
     GeneralizedAlpha,
     /// Hilber–Hughes–Taylor α (α_m = 0) with α_f from `rho_inf` ∈ [1/2, 1].
     HhtAlpha,
+    /// Wood–Bossak–Zienkiewicz α (α_f = 0: forces at t_{n+1}, for contact) from `rho_inf`.
+    Bossak,
 }
 
 /// Mass matrix of implicit dynamics.

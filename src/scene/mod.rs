@@ -66,6 +66,11 @@ pub const BUILTIN: &[(&str, &str, &str)] = &[
         "copper bar at 227 m/s onto a rigid wall: implicit dynamics, ALM (paper 3.1)",
         include_str!("scenes/taylor-bar.toml"),
     ),
+    (
+        "clip-tensile",
+        "plastic ring clip pulled by two cylindrical rigid pins with friction (paper 3.2)",
+        include_str!("scenes/clip-tensile.toml"),
+    ),
 ];
 
 /// The scene `alfe` and `alfe run` use when none is named.

@@ -56,6 +56,19 @@ impl AlphaParams {
             beta: 0.25 * (1.0 + af).powi(2),
         }
     }
+    /// Wood–Bossak–Zienkiewicz (Bossak-α): α_f = 0, α_m = (ρ∞ − 1)/(ρ∞ + 1) ∈ [−1, 0],
+    /// γ = ½ − α_m, β = ¼ (1 − α_m)². Forces are taken at t_{n+1} only (no averaging),
+    /// which contact needs: with α_f > 0 the last step's contact impulse re-enters the
+    /// balance and an impacting foot chatters on and off the wall.
+    pub fn bossak(rho_inf: f64) -> Self {
+        let am = (rho_inf - 1.0) / (rho_inf + 1.0);
+        Self {
+            alpha_m: am,
+            alpha_f: 0.0,
+            gamma: 0.5 - am,
+            beta: 0.25 * (1.0 - am).powi(2),
+        }
+    }
     /// c_M = ∂a_{n+1−α_m}/∂u_{n+1} = (1−α_m)/(β Δt²).
     pub fn c_m(&self, dt: f64) -> f64 {
         (1.0 - self.alpha_m) / (self.beta * dt * dt)
@@ -151,6 +164,14 @@ mod tests {
         let h = AlphaParams::hht(0.5);
         let r = spectral_radius(&h, 1e6, 1.0);
         assert!((r - 0.5).abs() < 2e-3, "HHT spectral radius {r}");
+        for rho in [0.5, 0.8] {
+            let b = AlphaParams::bossak(rho);
+            let r = spectral_radius(&b, 1e6, 1.0);
+            assert!(
+                (r - rho).abs() < 2e-3,
+                "Bossak rho_inf {rho}: spectral radius {r}"
+            );
+        }
     }
 
     #[test]

@@ -33,6 +33,7 @@ pub fn params_from_deck(a: &crate::scene::deck::AnalysisDeck) -> AlphaParams {
         SchemeKind::Newmark => AlphaParams::newmark(),
         SchemeKind::GeneralizedAlpha => AlphaParams::generalized_alpha(rho),
         SchemeKind::HhtAlpha => AlphaParams::hht(rho),
+        SchemeKind::Bossak => AlphaParams::bossak(rho),
     }
 }
 
@@ -286,6 +287,10 @@ pub fn run_implicit(
         }
         model.forces(comm, &trial, t1, &mut fi, &mut fe)?;
         tot.residual_evaluations += 1;
+        // Persistency: a node pressed against a wall moves with it along the normal. The
+        // Newmark update alone gives a node stopped within one step the reverse of its
+        // approach velocity, and the Taylor bar's foot bounced off the wall.
+        model.contact_persistency(&mut v1, &mut a1, t1, h);
         model.commit();
         let (react, g) = support_forces(comm, model, &mass, &a1, &fi, &fe);
         let mv = momentum(comm, model, &mass, &v1);
