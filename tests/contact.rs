@@ -71,3 +71,246 @@ fn contact_jacobian_matches_finite_differences() {
         }
     }
 }
+
+/// A column of a run's history by name.
+fn column(out: &alfe::app::RunOutcome, dir_name: &str, name: &str) -> Vec<f64> {
+    let _ = out;
+    let path = std::env::temp_dir()
+        .join(format!("alfe-test-{}-{dir_name}", std::process::id()))
+        .join("out/history.csv");
+    let text = std::fs::read_to_string(&path).unwrap();
+    let mut lines = text.lines();
+    let head: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let i = head
+        .iter()
+        .position(|c| *c == name)
+        .unwrap_or_else(|| panic!("no column {name} in {head:?}"));
+    lines
+        .map(|l| l.split(',').nth(i).unwrap().parse().unwrap())
+        .collect()
+}
+
+const PATCH: &str = r#"
+[scene]
+name = "contact-patch"
+units = "mm-t-s"
+[[materials]]
+name = "m"
+model = "neo-hookean"
+E = 100.0
+nu = 0.3
+[[parts]]
+name = "block"
+material = "m"
+mesh = { kind = "box", size = [2, 2, 1], cells = [4, 4, 3] }
+[[node_sets]]
+name = "x0"
+group = "xmin"
+[[node_sets]]
+name = "y0"
+group = "ymin"
+[[node_sets]]
+name = "bottom"
+group = "zmin"
+[[surfaces]]
+name = "top"
+group = "zmax"
+[[boundary]]
+type = "fixed"
+set = "x0"
+components = ["x"]
+[[boundary]]
+type = "fixed"
+set = "y0"
+components = ["y"]
+[[loads]]
+type = "pressure"
+surface = "top"
+pressure = 5.0
+[[walls]]
+name = "floor"
+shape = "plane"
+nodes = "bottom"
+[analysis]
+type = "static"
+end_time = 1.0
+step = 0.5
+"#;
+
+/// Frictionless contact patch test: a block pressed on a plane by a uniform pressure
+/// carries that pressure at every contact node (tributary areas on a uniform grid are
+/// the consistent nodal weights), to round-off, with zero penetration (ALM).
+#[test]
+fn contact_patch_test_uniform_pressure() {
+    let out = run_deck("patch-alm", PATCH);
+    let n = out.model.local.n_owned();
+    let f = out.model.contact.nodal_fields(n);
+    let bottom = &out.model.local.node_sets["bottom"];
+    assert_eq!(bottom.len(), 25);
+    let mut worst = 0.0f64;
+    for &b in bottom {
+        // The follower pressure acts on the deformed top face: the nominal pressure on
+        // the reference area is p · (deformed area / reference area) = p λ_x λ_y, and
+        // the same force reaches the floor.
+        worst = worst.max((f.pressure[b] - f.pressure[bottom[0]]).abs());
+        assert!(f.gap[b].abs() < 1e-12, "gap {}", f.gap[b]);
+    }
+    assert!(
+        worst < 1e-10 * f.pressure[bottom[0]],
+        "pressure not uniform: spread {worst:e}"
+    );
+    // Equilibrium: the wall carries the applied load (pressure on the deformed top).
+    let fz = column(&out, "patch-alm", "floor.fz");
+    let ux: f64 = out
+        .displacement_by_node()
+        .iter()
+        .filter(|(_, x, _)| (x[0] - 2.0).abs() < 1e-12 && x[2].abs() < 1e-12)
+        .map(|(_, _, u)| u[0])
+        .next()
+        .unwrap();
+    let stretch = 1.0 + ux / 2.0;
+    let expected = -5.0 * 4.0 * stretch * stretch;
+    assert!(
+        rel_err(*fz.last().unwrap(), expected) < 1e-3,
+        "floor.fz {} vs {expected}",
+        fz.last().unwrap()
+    );
+    let pen = column(&out, "patch-alm", "max_penetration");
+    assert!(pen.iter().all(|&p| p <= 1e-12), "{pen:?}");
+}
+
+/// Penalty shows its penetration, and it falls in proportion to the scale factor; ALM's
+/// is zero to round-off on the same deck.
+#[test]
+fn penalty_penetration_scales_with_the_factor() {
+    let mut pens = Vec::new();
+    for scale in [0.1, 1.0, 10.0] {
+        let deck = edit(
+            PATCH,
+            "nodes = \"bottom\"",
+            &format!("nodes = \"bottom\"\nmethod = \"penalty\"\npenalty_scale = {scale}"),
+        );
+        let name = format!("patch-pen{scale}");
+        let out = run_deck(&name, &deck);
+        pens.push(*column(&out, &name, "max_penetration").last().unwrap());
+    }
+    eprintln!("penalty penetration at scale 0.1, 1, 10: {pens:?}");
+    assert!(
+        pens[0] > 1e-3,
+        "a soft penalty penetrates visibly: {pens:?}"
+    );
+    for w in pens.windows(2) {
+        let ratio = w[0] / w[1];
+        assert!(
+            (ratio - 10.0).abs() < 0.5,
+            "penetration ∝ 1/scale: {pens:?}"
+        );
+    }
+}
+
+/// Sliding block: while the floor starts to move the bottom sticks (friction below
+/// μN, most contact nodes sticking), then the whole face slips and the
+/// tangential force is μ N within 1 % (ALM enforces the cone exactly: 1e-6 here).
+#[test]
+fn sliding_block_sticks_then_slips_at_mu_n() {
+    let out = run_deck("sliding", &builtin("sliding-block"));
+    let fx = column(&out, "sliding", "floor.fx");
+    let fz = column(&out, "sliding", "floor.fz");
+    let ux = column(&out, "sliding", "floor.ux");
+    let stick = column(&out, "sliding", "contact_sticking");
+    let active = column(&out, "sliding", "contact_active");
+    let pen = column(&out, "sliding", "max_penetration");
+    // The first step of the slide: all 45 bottom nodes in contact, most sticking (the
+    // rim already slipped outward under the press: Poisson's expansion against μ).
+    let first = ux.iter().position(|&u| u > 0.0).unwrap();
+    assert_eq!(active[first], 45.0);
+    assert!(
+        stick[first] > 30.0,
+        "stick at the start of the slide: {}",
+        stick[first]
+    );
+    assert!(fx[first].abs() < 0.3 * fz[first].abs() * 0.9);
+    assert!(fx[first].abs() > 0.0);
+    // The end: full slip, the force saturated.
+    let last = fx.len() - 1;
+    assert_eq!(stick[last], 0.0);
+    let ratio = fx[last].abs() / fz[last].abs();
+    assert!((ratio - 0.3).abs() < 0.003, "|fx/fz| = {ratio}");
+    assert!(
+        (ratio - 0.3).abs() < 1e-6,
+        "ALM's cone is exact: |fx/fz| = {ratio}"
+    );
+    // Friction opposes the floor's motion on the block, so the block drags the floor back.
+    assert!(fx[last] < 0.0);
+    let h = 20.0 / 8.0;
+    assert!(pen.iter().all(|&p| p <= 1e-6 * h), "penetration {pen:?}");
+}
+
+/// A tracked node that starts inside a wall is an input error naming the wall and node.
+#[test]
+fn initial_penetration_is_reported() {
+    let deck = edit(
+        PATCH,
+        "shape = \"plane\"",
+        "shape = \"plane\"\npoint = [0, 0, 0.01]",
+    );
+    let e = try_run_deck("inside", &deck).err().expect("must fail");
+    assert_eq!(e.kind, alfe::ErrorKind::Input);
+    assert!(
+        e.message.contains("walls[0]") && e.message.contains("starts 1.000e-2 inside"),
+        "{}",
+        e.message
+    );
+}
+
+/// Wall deck mistakes name their field.
+#[test]
+fn bad_wall_decks_name_the_field() {
+    for (from, to, want) in [
+        ("nodes = \"bottom\"", "nodes = \"nope\"", "walls[0].nodes"),
+        (
+            "shape = \"plane\"",
+            "shape = \"sphere\"",
+            "walls[0].radius: missing",
+        ),
+        (
+            "shape = \"plane\"",
+            "shape = \"plane\"\nfriction = -1",
+            "walls[0].friction",
+        ),
+        (
+            "shape = \"plane\"",
+            "shape = \"plane\"\nnormal = [0, 0, 0]",
+            "walls[0].normal",
+        ),
+        (
+            "shape = \"plane\"",
+            "shape = \"prism\"\nsize = [1, 2]",
+            "walls[0].size",
+        ),
+    ] {
+        let e = try_run_deck("badwall", &edit(PATCH, from, to))
+            .err()
+            .expect("must fail");
+        assert!(e.message.contains(want), "{want}: {}", e.message);
+    }
+}
+
+/// The clip: zero penetration at every step on both cylindrical pins, and the ring is
+/// held only by the pins, so their forces balance.
+#[test]
+fn clip_pins_balance_without_penetration() {
+    let out = run_deck("clip", &builtin("clip-tensile"));
+    let up = column(&out, "clip", "upper_pin.fy");
+    let low = column(&out, "clip", "lower_pin.fy");
+    let pen = column(&out, "clip", "max_penetration");
+    assert!(
+        up.last().unwrap() < &-50.0,
+        "the ring resists: {:?}",
+        up.last()
+    );
+    for (a, b) in up.iter().zip(&low) {
+        assert!((a + b).abs() < 1e-6 * a.abs().max(1.0), "{a} vs {b}");
+    }
+    assert!(pen.iter().all(|&p| p <= 1e-6 * 1.0), "penetration {pen:?}");
+}
