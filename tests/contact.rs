@@ -314,3 +314,52 @@ fn clip_pins_balance_without_penetration() {
     }
     assert!(pen.iter().all(|&p| p <= 1e-6 * 1.0), "penetration {pen:?}");
 }
+
+/// Hertz, rigid sphere on an elastic half-space (the built-in mesh, at d = 0.5 and 1 mm):
+/// force within 3 % of 4/3 E* √R d^1.5 and the contact radius (from a fit of the nodal
+/// pressures to p₀ √(1 − r²/a²)) within 5 % of √(R d); zero penetration. Sneddon's
+/// integrals for the exact sphere profile (small strain) give 0.1 % (d = 0.5) and 0.2 %
+/// (d = 1) *less* than the paraboloid formula, so the formula is the right yardstick
+/// here to well within the tolerance.
+#[test]
+fn hertz_force_and_contact_radius() {
+    let deck = edit(&builtin("hertz-sphere"), "step = 0.25", "step = 0.5");
+    let mut out = run_deck("hertz", &deck);
+    let fz = column(&out, "hertz", "sphere.fz");
+    let pen = column(&out, "hertz", "max_penetration");
+    let es = 200.0 / (1.0 - 0.09);
+    for (i, d) in [0.5f64, 1.0].iter().enumerate() {
+        let hertz = 4.0 / 3.0 * es * 50f64.sqrt() * d.powf(1.5) / 4.0;
+        // The body pushes the sphere up: +z on the wall.
+        let err = rel_err(fz[i], hertz);
+        eprintln!("d = {d}: F/4 = {} vs Hertz {hertz}: {:.2} %", fz[i], 100.0 * err);
+        assert!(err < 0.03, "d = {d}: {} vs {hertz}", fz[i]);
+    }
+    assert!(pen.iter().all(|&p| p < 1e-6 * 1.3), "{pen:?}");
+    // Contact radius at d = 1 from the pressure profile.
+    let n = out.model.local.n_owned();
+    let f = out.model.contact.nodal_fields(n);
+    let (mut s, mut rows) = ([0.0f64; 5], 0);
+    for i in 0..n {
+        if f.pressure[i] > 0.0 {
+            let x = out.model.local.coords[i];
+            let r2 = (x[0] + out.u[3 * i]).powi(2) + (x[1] + out.u[3 * i + 1]).powi(2);
+            let p2 = f.pressure[i].powi(2);
+            // Least squares p² = c0 + c1 r².
+            s[0] += 1.0;
+            s[1] += r2;
+            s[2] += r2 * r2;
+            s[3] += p2;
+            s[4] += r2 * p2;
+            rows += 1;
+        }
+    }
+    assert!(rows >= 10, "{rows} nodes in contact");
+    let det = s[0] * s[2] - s[1] * s[1];
+    let c0 = (s[3] * s[2] - s[1] * s[4]) / det;
+    let c1 = (s[0] * s[4] - s[1] * s[3]) / det;
+    let a = (-c0 / c1).sqrt();
+    eprintln!("contact radius {a} vs {}", 50f64.sqrt());
+    assert!(rel_err(a, 50f64.sqrt()) < 0.05, "contact radius {a}");
+    let _ = &mut out;
+}

@@ -71,6 +71,11 @@ pub const BUILTIN: &[(&str, &str, &str)] = &[
         "plastic ring clip pulled by two cylindrical rigid pins with friction (paper 3.2)",
         include_str!("scenes/clip-tensile.toml"),
     ),
+    (
+        "hertz-sphere",
+        "rigid sphere R = 50 mm pressed 1 mm into an elastic block, frictionless (Hertz)",
+        include_str!("scenes/hertz-sphere.toml"),
+    ),
 ];
 
 /// The scene `alfe` and `alfe run` use when none is named.
