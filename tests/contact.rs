@@ -332,7 +332,11 @@ fn hertz_force_and_contact_radius() {
         let hertz = 4.0 / 3.0 * es * 50f64.sqrt() * d.powf(1.5) / 4.0;
         // The body pushes the sphere up: +z on the wall.
         let err = rel_err(fz[i], hertz);
-        eprintln!("d = {d}: F/4 = {} vs Hertz {hertz}: {:.2} %", fz[i], 100.0 * err);
+        eprintln!(
+            "d = {d}: F/4 = {} vs Hertz {hertz}: {:.2} %",
+            fz[i],
+            100.0 * err
+        );
         assert!(err < 0.03, "d = {d}: {} vs {hertz}", fz[i]);
     }
     assert!(pen.iter().all(|&p| p < 1e-6 * 1.3), "{pen:?}");

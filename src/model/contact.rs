@@ -41,9 +41,10 @@ pub struct WallContact {
     pub mult_offset: Option<usize>,
     /// Global block of the first multiplier (ALM).
     pub mult_block: usize,
-    /// κ of each tracked node (force per length); the penalty stiffness is
-    /// `penalty_scale · κ`.
+    /// κ of each tracked node (force per length), ALM's scale.
     pub kappa: Vec<f64>,
+    /// The diagonal stiffness of each tracked node (the penalty's base).
+    pub k_node: Vec<f64>,
     /// Node positions at the start of the step (committed).
     x_old: Vec<[f64; 3]>,
     x_new: Vec<[f64; 3]>,
@@ -155,6 +156,7 @@ impl Contact {
                     mult_offset,
                     mult_block,
                     kappa: vec![d.kappa.unwrap_or(1.0); n],
+                    k_node: vec![1.0; n],
                     x_old: x0.clone(),
                     x_new: x0,
                     n_old: vec![None; n],
@@ -185,13 +187,18 @@ impl Contact {
         self.walls.is_empty()
     }
 
-    /// Set κ of every node that has no deck override from the model's stiffness: the
-    /// mean diagonal of the node's block, `diag(node)`.
-    pub fn set_kappa(&mut self, diag: impl Fn(usize) -> f64) {
+    /// Set the nodal stiffness of every tracked node from the model's stiffness:
+    /// `stiffness(node)` = (mean diagonal of the node's block, E/(λ+2μ) factor). The
+    /// penalty stiffness is `penalty_scale` times the diagonal (bulk-dominated, as
+    /// LS-DYNA's k = f K A²/V); κ of ALM (without a deck value) is the diagonal times
+    /// the factor (see `Model::set_contact_scales`).
+    pub fn set_kappa(&mut self, stiffness: impl Fn(usize) -> (f64, f64)) {
         for w in &mut self.walls {
-            if w.def.kappa.is_none() {
-                for (j, &n) in w.def.nodes.iter().enumerate() {
-                    w.kappa[j] = diag(n).max(f64::MIN_POSITIVE);
+            for (j, &n) in w.def.nodes.iter().enumerate() {
+                let (d, f) = stiffness(n);
+                w.k_node[j] = d.max(f64::MIN_POSITIVE);
+                if w.def.kappa.is_none() {
+                    w.kappa[j] = (f * d).max(f64::MIN_POSITIVE);
                 }
             }
         }
@@ -297,7 +304,7 @@ impl Contact {
                 t1[0] * fo[0] + t1[1] * fo[1] + t1[2] * fo[2],
                 t2[0] * fo[0] + t2[1] * fo[1] + t2[2] * fo[2],
             ];
-            let kp = w.def.penalty_scale * kappa;
+            let kp = w.def.penalty_scale * w.k_node[j];
             let pt = penalty(g, fo_l, kp, kp, mu);
             e.c.active = pt.active;
             e.c.sticking = pt.sticking;

@@ -188,9 +188,11 @@ impl Model {
         let start = self.blocks.start();
         let nb = &self.node_block;
         self.contact.set_kappa(|n| {
-            k.block(nb[n] - start, nb[n])
-                .map(|b| factor[n] * (b[0] + b[4] + b[8]) / 3.0)
-                .unwrap_or(0.0)
+            let d = k
+                .block(nb[n] - start, nb[n])
+                .map(|b| (b[0] + b[4] + b[8]) / 3.0)
+                .unwrap_or(0.0);
+            (d, factor[n])
         });
     }
 
