@@ -380,7 +380,10 @@ fn taylor_bar_implicit_alm() {
     let ratio = (32.4 + top.last().unwrap()) / 32.4;
     eprintln!("L/L0 = {ratio}");
     assert!((0.655..0.675).contains(&ratio), "L/L0 = {ratio}");
-    assert!(fz.iter().all(|&f| f <= 0.0), "the body only pushes the wall");
+    assert!(
+        fz.iter().all(|&f| f <= 0.0),
+        "the body only pushes the wall"
+    );
     assert!(fz.iter().any(|&f| f < -1e4), "an impact force");
     // Smallest element edge near the foot ~0.3 mm.
     assert!(pen.iter().all(|&p| p <= 1e-6 * 0.3), "{pen:?}");
