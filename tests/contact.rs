@@ -73,11 +73,8 @@ fn contact_jacobian_matches_finite_differences() {
 }
 
 /// A column of a run's history by name.
-fn column(out: &alfe::app::RunOutcome, dir_name: &str, name: &str) -> Vec<f64> {
-    let _ = out;
-    let path = std::env::temp_dir()
-        .join(format!("alfe-test-{}-{dir_name}", std::process::id()))
-        .join("out/history.csv");
+fn column(out: &alfe::app::RunOutcome, name: &str) -> Vec<f64> {
+    let path = std::path::Path::new(&out.summary.output_dir).join("history.csv");
     let text = std::fs::read_to_string(&path).unwrap();
     let mut lines = text.lines();
     let head: Vec<&str> = lines.next().unwrap().split(',').collect();
@@ -160,7 +157,7 @@ fn contact_patch_test_uniform_pressure() {
         "pressure not uniform: spread {worst:e}"
     );
     // Equilibrium: the wall carries the applied load (pressure on the deformed top).
-    let fz = column(&out, "patch-alm", "floor.fz");
+    let fz = column(&out, "floor.fz");
     let ux: f64 = out
         .displacement_by_node()
         .iter()
@@ -175,7 +172,7 @@ fn contact_patch_test_uniform_pressure() {
         "floor.fz {} vs {expected}",
         fz.last().unwrap()
     );
-    let pen = column(&out, "patch-alm", "max_penetration");
+    let pen = column(&out, "max_penetration");
     assert!(pen.iter().all(|&p| p <= 1e-12), "{pen:?}");
 }
 
@@ -192,7 +189,7 @@ fn penalty_penetration_scales_with_the_factor() {
         );
         let name = format!("patch-pen{scale}");
         let out = run_deck(&name, &deck);
-        pens.push(*column(&out, &name, "max_penetration").last().unwrap());
+        pens.push(*column(&out, "max_penetration").last().unwrap());
     }
     eprintln!("penalty penetration at scale 0.1, 1, 10: {pens:?}");
     assert!(
@@ -214,12 +211,12 @@ fn penalty_penetration_scales_with_the_factor() {
 #[test]
 fn sliding_block_sticks_then_slips_at_mu_n() {
     let out = run_deck("sliding", &builtin("sliding-block"));
-    let fx = column(&out, "sliding", "floor.fx");
-    let fz = column(&out, "sliding", "floor.fz");
-    let ux = column(&out, "sliding", "floor.ux");
-    let stick = column(&out, "sliding", "contact_sticking");
-    let active = column(&out, "sliding", "contact_active");
-    let pen = column(&out, "sliding", "max_penetration");
+    let fx = column(&out, "floor.fx");
+    let fz = column(&out, "floor.fz");
+    let ux = column(&out, "floor.ux");
+    let stick = column(&out, "contact_sticking");
+    let active = column(&out, "contact_active");
+    let pen = column(&out, "max_penetration");
     // The first step of the slide: all 45 bottom nodes in contact, most sticking (the
     // rim already slipped outward under the press: Poisson's expansion against μ).
     let first = ux.iter().position(|&u| u > 0.0).unwrap();
@@ -301,9 +298,9 @@ fn bad_wall_decks_name_the_field() {
 #[test]
 fn clip_pins_balance_without_penetration() {
     let out = run_deck("clip", &builtin("clip-tensile"));
-    let up = column(&out, "clip", "upper_pin.fy");
-    let low = column(&out, "clip", "lower_pin.fy");
-    let pen = column(&out, "clip", "max_penetration");
+    let up = column(&out, "upper_pin.fy");
+    let low = column(&out, "lower_pin.fy");
+    let pen = column(&out, "max_penetration");
     assert!(
         up.last().unwrap() < &-50.0,
         "the ring resists: {:?}",
@@ -324,9 +321,9 @@ fn clip_pins_balance_without_penetration() {
 #[test]
 fn hertz_force_and_contact_radius() {
     let deck = edit(&builtin("hertz-sphere"), "step = 0.25", "step = 0.5");
-    let mut out = run_deck("hertz", &deck);
-    let fz = column(&out, "hertz", "sphere.fz");
-    let pen = column(&out, "hertz", "max_penetration");
+    let out = run_deck("hertz", &deck);
+    let fz = column(&out, "sphere.fz");
+    let pen = column(&out, "max_penetration");
     let es = 200.0 / (1.0 - 0.09);
     for (i, d) in [0.5f64, 1.0].iter().enumerate() {
         let hertz = 4.0 / 3.0 * es * 50f64.sqrt() * d.powf(1.5) / 4.0;
@@ -365,7 +362,6 @@ fn hertz_force_and_contact_radius() {
     let a = (-c0 / c1).sqrt();
     eprintln!("contact radius {a} vs {}", 50f64.sqrt());
     assert!(rel_err(a, 50f64.sqrt()) < 0.05, "contact radius {a}");
-    let _ = &mut out;
 }
 
 /// Taylor bar (implicit Bossak-α, ALM): the final length within the published spread
@@ -374,9 +370,9 @@ fn hertz_force_and_contact_radius() {
 #[test]
 fn taylor_bar_implicit_alm() {
     let out = run_deck("taylor", &builtin("taylor-bar"));
-    let fz = column(&out, "taylor", "wall.fz");
-    let pen = column(&out, "taylor", "max_penetration");
-    let top = column(&out, "taylor", "top.uz");
+    let fz = column(&out, "wall.fz");
+    let pen = column(&out, "max_penetration");
+    let top = column(&out, "top.uz");
     let ratio = (32.4 + top.last().unwrap()) / 32.4;
     eprintln!("L/L0 = {ratio}");
     assert!((0.655..0.675).contains(&ratio), "L/L0 = {ratio}");

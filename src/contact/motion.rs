@@ -41,6 +41,16 @@ impl Pose {
         }
         y
     }
+    /// A global direction in local coordinates: Rᵀ v.
+    pub fn dir_to_local(&self, v: [f64; 3]) -> [f64; 3] {
+        let mut y = [0.0; 3];
+        for j in 0..3 {
+            for i in 0..3 {
+                y[j] += self.r[i][j] * v[i];
+            }
+        }
+        y
+    }
     /// A local direction in global coordinates.
     pub fn dir_to_global(&self, v: [f64; 3]) -> [f64; 3] {
         let mut y = [0.0; 3];

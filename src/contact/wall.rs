@@ -2,7 +2,7 @@
 //! friction, the enforcement method and the tracked nodes (node-to-surface, one way,
 //! as the paper's rigid walls).
 
-use super::motion::RigidMotion;
+use super::motion::{Pose, RigidMotion};
 use super::shape::{Cylinder, FinitePlane, Plane, Prism, Projection, Shape, Sphere};
 use serde::{Deserialize, Serialize};
 
@@ -88,25 +88,17 @@ pub struct WallPoint {
     pub point_old: [f64; 3],
 }
 
-/// Project a global point onto a wall at time t; `t_old` gives `point_old`; `hint` is
-/// the node's outward normal at the start of the step (global), if it had one.
+/// Project a global point onto a wall placed at `pose` (time t); `pose_old` (the start of
+/// the step) gives `point_old`; `hint` is the node's outward normal at the start of the
+/// step (global), if it had one. Callers compute the poses once per wall.
 pub fn project(
     shape: &dyn Shape,
-    motion: &RigidMotion,
+    pose: &Pose,
+    pose_old: &Pose,
     x: [f64; 3],
-    t: f64,
-    t_old: f64,
     hint: Option<[f64; 3]>,
 ) -> Option<WallPoint> {
-    let pose = motion.pose(t);
-    let hint_local = hint.map(|n| {
-        let r = pose.r;
-        [
-            r[0][0] * n[0] + r[1][0] * n[1] + r[2][0] * n[2],
-            r[0][1] * n[0] + r[1][1] * n[1] + r[2][1] * n[2],
-            r[0][2] * n[0] + r[1][2] * n[1] + r[2][2] * n[2],
-        ]
-    });
+    let hint_local = hint.map(|n| pose.dir_to_local(n));
     let p: Projection = shape.project_hinted(pose.to_local(x), hint_local)?;
     let n = pose.dir_to_global(p.normal);
     let t1 = pose.dir_to_global(p.tangents[0]);
@@ -120,6 +112,6 @@ pub fn project(
         frame,
         point: pose.to_global(p.point),
         hessian: pose.tensor_to_global(p.hessian),
-        point_old: motion.pose(t_old).to_global(p.point),
+        point_old: pose_old.to_global(p.point),
     })
 }

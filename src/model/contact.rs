@@ -8,6 +8,7 @@
 #![allow(clippy::needless_range_loop)]
 
 use crate::contact::law::{alm, penalty};
+use crate::contact::motion::Pose;
 use crate::contact::shape::Shape;
 use crate::contact::wall::{project, ContactMethod, WallDef};
 use crate::parallel::Comm;
@@ -218,7 +219,15 @@ impl Contact {
         p
     }
 
-    fn node(&self, w: &WallContact, j: usize, x: [f64; 3], lam: [f64; 3], t: f64) -> NodeEval {
+    /// One tracked node of wall `w` placed at `pose` (`pose_old` at the step's start).
+    fn node(
+        w: &WallContact,
+        j: usize,
+        x: [f64; 3],
+        lam: [f64; 3],
+        pose: &Pose,
+        pose_old: &Pose,
+    ) -> NodeEval {
         let mut e = NodeEval {
             c: NodeContact {
                 gap: f64::NAN,
@@ -236,14 +245,7 @@ impl Contact {
         };
         let kappa = w.kappa[j];
         let alm_wall = w.mult_offset.is_some();
-        let Some(wp) = project(
-            w.shape.as_ref(),
-            &w.def.motion,
-            x,
-            t,
-            self.t_old,
-            w.n_old[j],
-        ) else {
+        let Some(wp) = project(w.shape.as_ref(), pose, pose_old, x, w.n_old[j]) else {
             // Out of the wall's reach: multipliers driven to zero, no force.
             if alm_wall {
                 for i in 0..3 {
@@ -386,6 +388,7 @@ impl Contact {
             if explicit && w.mult_offset.is_some() {
                 continue;
             }
+            let (pose, pose_old) = (w.def.motion.pose(t), w.def.motion.pose(self.t_old));
             for j in 0..w.def.nodes.len() {
                 let n = w.def.nodes[j];
                 let x = [
@@ -401,7 +404,7 @@ impl Contact {
                     ],
                     None => [0.0; 3],
                 };
-                let e = self.node(w, j, x, lam, t);
+                let e = Self::node(w, j, x, lam, &pose, &pose_old);
                 for c in 0..3 {
                     f_ext[3 * n + c] -= e.r_node[c];
                 }
@@ -449,6 +452,7 @@ impl Contact {
             if w.mult_offset.is_none() {
                 continue;
             }
+            let (pose, pose_old) = (w.def.motion.pose(t), w.def.motion.pose(t - h));
             for j in 0..w.def.nodes.len() {
                 let n = w.def.nodes[j];
                 let x = [
@@ -460,20 +464,18 @@ impl Contact {
                     gap: f64::NAN,
                     ..NodeContact::default()
                 };
-                if let Some(wp) = project(w.shape.as_ref(), &w.def.motion, x, t, t - h, w.n_old[j])
-                {
+                if let Some(wp) = project(w.shape.as_ref(), &pose, &pose_old, x, w.n_old[j]) {
                     c.gap = wp.gap;
                     w.n_new[j] = Some([wp.frame[0][0], wp.frame[1][0], wp.frame[2][0]]);
                     if wp.gap < 0.0 {
                         let nrm = [wp.frame[0][0], wp.frame[1][0], wp.frame[2][0]];
-                        let vw: Vec<f64> = (0..3)
-                            .map(|i| (wp.point[i] - wp.point_old[i]) / h)
-                            .collect();
-                        let vr: Vec<f64> = (0..3).map(|i| v[3 * n + i] - vw[i]).collect();
+                        let vr: [f64; 3] = std::array::from_fn(|i| {
+                            v[3 * n + i] - (wp.point[i] - wp.point_old[i]) / h
+                        });
                         let vn = vr[0] * nrm[0] + vr[1] * nrm[1] + vr[2] * nrm[2];
                         let mut dv = [0.0; 3];
                         if vn < 0.0 {
-                            let vt: Vec<f64> = (0..3).map(|i| vr[i] - vn * nrm[i]).collect();
+                            let vt: [f64; 3] = std::array::from_fn(|i| vr[i] - vn * nrm[i]);
                             let vtn = (vt[0] * vt[0] + vt[1] * vt[1] + vt[2] * vt[2]).sqrt();
                             let cut = if vtn > 0.0 {
                                 (w.def.friction * (-vn) / vtn).min(1.0)
@@ -514,18 +516,18 @@ impl Contact {
     /// node-wall impact.
     pub fn persistency(&self, v: &mut [f64], a: &mut [f64], t: f64, h: f64) {
         for w in &self.walls {
+            let (pose, pose_old) = (w.def.motion.pose(t), w.def.motion.pose(t - h));
             for (j, &n) in w.def.nodes.iter().enumerate() {
                 let c = &w.last[j];
                 if !(c.active && c.normal_force > 0.0) {
                     continue;
                 }
                 let Some(nrm) = w.n_new[j] else { continue };
-                let pose = w.def.motion.pose(t);
-                let local = pose.to_local(w.x_new[j]);
-                let before = w.def.motion.pose(t - h).to_global(local);
                 let x = w.x_new[j];
-                let vw: Vec<f64> = (0..3).map(|i| (x[i] - before[i]) / h).collect();
-                let vn: f64 = (0..3).map(|i| (v[3 * n + i] - vw[i]) * nrm[i]).sum();
+                let before = pose_old.to_global(pose.to_local(x));
+                let vn: f64 = (0..3)
+                    .map(|i| (v[3 * n + i] - (x[i] - before[i]) / h) * nrm[i])
+                    .sum();
                 let an: f64 = (0..3).map(|i| a[3 * n + i] * nrm[i]).sum();
                 for i in 0..3 {
                     v[3 * n + i] -= vn * nrm[i];

@@ -502,7 +502,6 @@ pub fn build(deck: &Deck, deck_dir: &Path) -> Result<ModelDef> {
             part_nodes: &part_nodes,
             set_nodes: &set_nodes,
             curve: &curve,
-            curves: &curves,
             tol: 1e-8 * diag.max(1e-300),
         },
     )?;

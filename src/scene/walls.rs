@@ -137,7 +137,6 @@ pub struct WallInputs<'a> {
     pub part_nodes: &'a [BTreeSet<usize>],
     pub set_nodes: &'a dyn Fn(String, &str) -> Result<Vec<usize>>,
     pub curve: &'a dyn Fn(String, &Option<String>) -> Result<Curve>,
-    pub curves: &'a BTreeMap<String, Curve>,
     /// Tolerance for "starts inside" (a small fraction of the model size).
     pub tol: f64,
 }
@@ -364,7 +363,6 @@ fn build_wall(w: &WallDeck, f: &str, inp: &WallInputs) -> Result<WallDef> {
             (None, None) => {}
             _ => return Err(err(&mf, "a rotation needs both `axis` and `angle`")),
         }
-        let _ = inp.curves;
     }
     // A plane without a display size is drawn as large as the model.
     if let ShapeDef::Plane { display_size } = &mut shape {
@@ -387,9 +385,10 @@ fn build_wall(w: &WallDeck, f: &str, inp: &WallInputs) -> Result<WallDef> {
     // No tracked node may start inside the wall: the multiplier/penalty would push it out
     // with a force nobody asked for.
     let s = def.shape.build();
+    let pose0 = def.motion.pose(0.0);
     for &n in &def.nodes {
         let x = inp.mesh.coords[n];
-        if let Some(p) = project(s.as_ref(), &def.motion, x, 0.0, 0.0, None) {
+        if let Some(p) = project(s.as_ref(), &pose0, &pose0, x, None) {
             if p.gap < -inp.tol {
                 return Err(err(
                     f,
