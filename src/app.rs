@@ -2,20 +2,21 @@
 //! arguments and maps errors to exit codes; tests call these functions directly.
 
 use crate::model::def::ModelDef;
+use crate::model::distribute;
 use crate::model::Model;
 use crate::output::results::ResultsWriter;
 use crate::parallel::Comm;
-use crate::partition::{cache, distribute, quality};
-use crate::scene::deck::{AnalysisKind, FdStepDeck, NonlinearKind, PreconditionerKind};
-use crate::solve::linear::gmres::GmresOptions;
-use crate::solve::linear::PcKind;
-use crate::solve::nonlinear::{FdRule, NonlinearOptions, SolverKind};
+use crate::partition::{cache, quality};
+use crate::scene::{RunSettings, Scene};
+use crate::solve::nonlinear::SolverKind;
 use crate::solve::stepping::StepRecord;
 use crate::solve::stepping::{run_static, RunTotals};
 use crate::solve::time::explicit::run_explicit;
 use crate::solve::time::implicit::run_implicit;
 use crate::solve::time::{DynState, OutputClock};
+use crate::solve::{Analysis, AnalysisKind};
 use crate::{Error, ErrorKind, Result};
+use std::collections::BTreeMap;
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -61,13 +62,12 @@ pub struct Summary {
     pub residual_evaluations: usize,
     pub factorizations: usize,
     pub retries: usize,
-    /// Models with walls: the largest penetration over all steps (≥ 0).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub max_penetration: Option<f64>,
-    /// Models with walls: each wall's force and moment on the wall and its prescribed
-    /// displacement at the last converged step, by wall name.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub walls: Option<std::collections::BTreeMap<String, crate::model::contact::WallReport>>,
+    /// What the model's contributions report: the largest value over the run of the
+    /// history columns that ask for it (`max_penetration` with contact), and each
+    /// contribution's entry at the last converged step by group (`walls`: force, moment
+    /// and displacement of each wall).
+    #[serde(flatten)]
+    pub contributions: BTreeMap<String, serde_json::Value>,
     pub wall_time_s: f64,
     /// Wall time by phase (max over ranks): setup, partition, assembly, linear_solve, output.
     pub phases: Phases,
@@ -134,63 +134,38 @@ pub fn on_rank0<T>(comm: &dyn Comm, f: impl FnOnce() -> Result<T>) -> Result<Opt
     })
 }
 
-/// Newton options from the deck's solver settings.
-pub fn solver_options(
-    def: &crate::model::def::Settings,
-    char_length: f64,
-    kind: Option<SolverKind>,
-) -> NonlinearOptions {
-    let s = &def.solver;
-    let kind = kind.unwrap_or(match s.nonlinear {
-        NonlinearKind::Newton => SolverKind::Newton,
-        NonlinearKind::Bfgs => SolverKind::Bfgs,
-        NonlinearKind::Jfnk => SolverKind::Jfnk,
-    });
-    NonlinearOptions {
-        kind,
-        max_iterations: s.max_iterations,
-        residual_rtol: s.residual_rtol,
-        increment_rtol: s.increment_rtol,
-        energy_rtol: s.energy_rtol,
-        linear: GmresOptions {
-            rtol: s.linear.rtol,
-            atol: 0.0,
-            restart: s.linear.restart,
-            max_iterations: s.linear.max_iterations,
-        },
-        preconditioner: match s.linear.preconditioner {
-            PreconditionerKind::BlockJacobi => PcKind::BlockJacobi,
-            PreconditionerKind::Asm => PcKind::Asm,
-            PreconditionerKind::None => PcKind::None,
-        },
-        pc_lag: s.linear.lag,
-        bfgs_reform: s.bfgs_reform,
-        fd_delta: s.fd_delta,
-        fd_rule: match s.fd_step {
-            FdStepDeck::Element => FdRule::Element,
-            FdStepDeck::WalkerPernice => FdRule::WalkerPernice,
-        },
-        char_length,
-        line_search: s.line_search.unwrap_or(false),
-    }
+/// Everything a run needs on every rank: its piece of the model, how to run it, and
+/// where the partition came from.
+pub struct Setup {
+    pub model: Model,
+    pub run: RunSettings,
+    /// "cache", "computed" or "trivial".
+    pub partition: String,
 }
 
-/// Collective: read and partition on rank 0, give each rank its piece.
-pub fn setup(comm: &dyn Comm, opts: &RunOptions, phases: &mut Phases) -> Result<(Model, String)> {
+/// Collective: read and partition on rank 0, give each rank its piece and the run
+/// settings (with `--solver` and `--contact` applied, and the FD length of the mesh).
+pub fn setup(comm: &dyn Comm, opts: &RunOptions, phases: &mut Phases) -> Result<Setup> {
     let t0 = Instant::now();
     let mut t_part = 0.0;
     let pieces = on_rank0(comm, || {
         let src = crate::scene::load(&opts.target)?;
-        let mut def = crate::scene::model(&src)?;
+        let Scene {
+            model: mut def,
+            mut run,
+        } = crate::scene::read(&src)?;
         if let Some(m) = opts.contact {
-            for w in &mut def.walls {
-                w.method = m;
+            for c in &mut def.contributions {
+                c.kind_mut().set_contact_method(m);
             }
+        }
+        if let Some(k) = opts.solver {
+            run.solver.kind = k;
         }
         let tp = Instant::now();
         let (part, origin, _) = cache::get(
             &opts.partitions,
-            &def.settings.scene,
+            &run.name,
             &def.mesh,
             comm.size(),
             opts.repartition,
@@ -202,19 +177,39 @@ pub fn setup(comm: &dyn Comm, opts: &RunOptions, phases: &mut Phases) -> Result<
             cache::Origin::Computed => "computed",
             cache::Origin::Trivial => "trivial",
         };
-        Ok((pieces, origin.to_string()))
+        Ok((pieces, run, origin.to_string()))
     })?;
-    let (pieces, origin) = match pieces {
-        Some((p, o)) => (Some(p), o),
-        None => (None, String::new()),
+    let (pieces, run, origin) = match pieces {
+        Some((p, r, o)) => (Some(p), Some(r), o),
+        None => (None, None, String::new()),
     };
     let tp = Instant::now();
     let local = distribute::scatter(comm, pieces)?;
+    let mut run: RunSettings = broadcast(comm, run)?;
     let model = Model::new(comm, local)?;
+    run.solver.char_length = model.char_length(comm);
     t_part += tp.elapsed().as_secs_f64();
     phases.partition = t_part;
     phases.setup = t0.elapsed().as_secs_f64() - t_part;
-    Ok((model, origin))
+    Ok(Setup {
+        model,
+        run,
+        partition: origin,
+    })
+}
+
+/// Collective: rank 0's value on every rank (serialised).
+fn broadcast<T: serde::Serialize + serde::de::DeserializeOwned>(
+    comm: &dyn Comm,
+    value: Option<T>,
+) -> Result<T> {
+    let mut bytes = match &value {
+        Some(v) if comm.rank() == 0 => bincode::serialize(v)
+            .map_err(|e| Error::runtime(format!("serialising run settings: {e}")))?,
+        _ => Vec::new(),
+    };
+    comm.broadcast_bytes(0, &mut bytes);
+    bincode::deserialize(&bytes).map_err(|e| Error::runtime(format!("receiving run settings: {e}")))
 }
 
 /// What `run` hands back to a caller in the same process (tests, scripts in Rust).
@@ -230,7 +225,7 @@ pub struct RunOutcome {
 impl RunOutcome {
     /// Displacement of every owned node indexed by the user's node number.
     pub fn displacement_by_node(&self) -> Vec<(usize, [f64; 3], [f64; 3])> {
-        let l = &self.model.local;
+        let l = &self.model.mesh;
         (0..l.n_owned())
             .map(|i| {
                 (
@@ -248,23 +243,35 @@ impl RunOutcome {
 pub fn run(comm: &dyn Comm, opts: &RunOptions) -> Result<RunOutcome> {
     let t_start = Instant::now();
     let mut phases = Phases::default();
-    let (mut model, origin) = setup(comm, opts, &mut phases)?;
-    let scene = model.local.settings.scene.clone();
+    let Setup {
+        mut model,
+        run: settings,
+        partition: origin,
+    } = setup(comm, opts, &mut phases)?;
+    let scene = settings.name.clone();
     let out = opts
         .out
         .clone()
         .unwrap_or_else(|| PathBuf::from("out").join(&scene));
-    let mut writer = ResultsWriter::create(comm, &out, &model)?;
-    let nopts = solver_options(&model.local.settings, model.char_length(comm), opts.solver);
-    let every = model.local.settings.output.every;
-    let end_time = model.local.settings.analysis.end_time;
-    let kind = model.local.settings.analysis.kind;
-    let n_steps = nominal_steps(&model.local.settings.analysis);
+    let analysis = &settings.analysis;
+    let mut writer = ResultsWriter::create(
+        comm,
+        &out,
+        &model,
+        &scene,
+        settings.units.describe(),
+        analysis.is_dynamic(),
+    )?;
+    let nopts = &settings.solver;
+    let every = settings.output.every;
+    let end_time = analysis.end_time;
+    let kind = analysis.kind;
+    let n_steps = nominal_steps(analysis);
     let quiet = opts.quiet || comm.rank() != 0;
     // Explicit runs: the time step from the mesh (an input error if the deck's is unstable).
     let explicit_dt = if kind == AnalysisKind::Explicit {
         Some(crate::solve::time::explicit::explicit_time_step(
-            comm, &model,
+            comm, &model, analysis,
         )?)
     } else {
         None
@@ -277,9 +284,9 @@ pub fn run(comm: &dyn Comm, opts: &RunOptions) -> Result<RunOutcome> {
         println!(
             "alfe: scene {scene} on {} rank(s) with {method}: {} nodes, {} elements, {} unknowns, {} nominal steps",
             comm.size(),
-            model.local.n_nodes_global,
-            model.local.n_elems_global,
-            model.dofs.global_len(),
+            model.mesh.n_nodes_global,
+            model.mesh.n_elems_global,
+            model.dofs.dofs.global_len(),
             n_steps
         );
         if let Some((dt, st)) = &explicit_dt {
@@ -294,14 +301,9 @@ pub fn run(comm: &dyn Comm, opts: &RunOptions) -> Result<RunOutcome> {
     }
     let mut u = Vec::new();
     let mut records = Vec::new();
-    let set_names = model.local.reaction_sets.clone();
+    let set_names = model.reaction_sets.clone();
     let totals: RunTotals = if kind != AnalysisKind::Static {
-        let interval = model
-            .local
-            .settings
-            .output
-            .interval
-            .unwrap_or(end_time / 100.0);
+        let interval = settings.output.interval;
         let mut clock = OutputClock::new(interval, end_time);
         let mut state = DynState::default();
         let mut observe = |rec: &StepRecord, s: &DynState, m: &Model| -> Result<()> {
@@ -326,30 +328,42 @@ pub fn run(comm: &dyn Comm, opts: &RunOptions) -> Result<RunOutcome> {
             Ok(())
         };
         let t = match &explicit_dt {
-            Some((dt, stable)) => {
-                run_explicit(comm, &mut model, &mut state, *dt, stable, &mut observe)?
-            }
-            None => run_implicit(comm, &mut model, &mut state, &nopts, &mut observe)?,
+            Some((dt, stable)) => run_explicit(
+                comm,
+                &mut model,
+                &mut state,
+                analysis,
+                *dt,
+                stable,
+                &mut observe,
+            )?,
+            None => run_implicit(comm, &mut model, &mut state, analysis, nopts, &mut observe)?,
         };
         u = state.u;
         t
     } else {
-        run_static(comm, &mut model, &mut u, &nopts, &mut |rec, u, m| {
-            let fields = rec.step % every == 0 || rec.time >= end_time;
-            writer.step(comm, rec, u, m, fields)?;
-            records.push(rec.clone());
-            if !quiet {
-                let reac = set_names
-                    .iter()
-                    .zip(&rec.reactions)
-                    .map(|(n, f)| format!(" {n}=({:.4e}, {:.4e}, {:.4e})", f[0], f[1], f[2]))
-                    .collect::<String>();
-                let retry = if rec.retries > 0 {
-                    format!("  retries {}", rec.retries)
-                } else {
-                    String::new()
-                };
-                println!(
+        run_static(
+            comm,
+            &mut model,
+            &mut u,
+            analysis,
+            nopts,
+            &mut |rec, u, m| {
+                let fields = rec.step % every == 0 || rec.time >= end_time;
+                writer.step(comm, rec, u, m, fields)?;
+                records.push(rec.clone());
+                if !quiet {
+                    let reac = set_names
+                        .iter()
+                        .zip(&rec.reactions)
+                        .map(|(n, f)| format!(" {n}=({:.4e}, {:.4e}, {:.4e})", f[0], f[1], f[2]))
+                        .collect::<String>();
+                    let retry = if rec.retries > 0 {
+                        format!("  retries {}", rec.retries)
+                    } else {
+                        String::new()
+                    };
+                    println!(
                 "step {:>4}  t={:<10.4e} ({:>3.0}%)  {} {:>2}  gmres {:>4}  |r|/f={:.2e}  {:.2}s{retry}{reac}",
                 rec.step,
                 rec.time,
@@ -360,9 +374,10 @@ pub fn run(comm: &dyn Comm, opts: &RunOptions) -> Result<RunOutcome> {
                 rec.stats.residual_history.last().copied().unwrap_or(0.0),
                 rec.wall_seconds
             );
-            }
-            Ok(())
-        })?
+                }
+                Ok(())
+            },
+        )?
     };
     phases.assembly = totals.seconds_assembly;
     phases.linear_solve = totals.seconds_linear;
@@ -377,25 +392,20 @@ pub fn run(comm: &dyn Comm, opts: &RunOptions) -> Result<RunOutcome> {
     comm.allreduce_max(&mut ph);
     let rss = comm.allgather_f64(peak_rss_mb());
     let message = totals.failure.clone().unwrap_or_else(|| "converged".into());
-    let (max_penetration, walls) = contact_summary(&model, &records);
+    let contributions = contributions_summary(&model, &records);
     let summary = Summary {
         scene: scene.clone(),
-        units: model.local.settings.units.describe().into(),
+        units: settings.units.describe().into(),
         ranks: comm.size(),
-        nodes: model.local.n_nodes_global,
-        elements: model.local.n_elems_global,
-        unknowns: model.dofs.global_len(),
+        nodes: model.mesh.n_nodes_global,
+        elements: model.mesh.n_elems_global,
+        unknowns: model.dofs.dofs.global_len(),
         solver: method,
-        analysis: match kind {
-            AnalysisKind::Static => "static",
-            AnalysisKind::Implicit => "implicit",
-            AnalysisKind::Explicit => "explicit",
-        }
-        .into(),
+        analysis: kind.name().into(),
         time_step: explicit_dt
             .as_ref()
             .map(|(dt, _)| *dt)
-            .unwrap_or(model.local.settings.analysis.step),
+            .unwrap_or(analysis.step),
         stable_time_step: explicit_dt.as_ref().map(|(_, s)| s.dt),
         steps: totals.steps,
         converged: totals.converged,
@@ -404,8 +414,7 @@ pub fn run(comm: &dyn Comm, opts: &RunOptions) -> Result<RunOutcome> {
         residual_evaluations: totals.residual_evaluations,
         factorizations: totals.factorizations,
         retries: totals.retries,
-        max_penetration,
-        walls,
+        contributions,
         wall_time_s: t_start.elapsed().as_secs_f64(),
         phases: Phases {
             setup: ph[0],
@@ -451,80 +460,88 @@ pub fn run(comm: &dyn Comm, opts: &RunOptions) -> Result<RunOutcome> {
     })
 }
 
-/// The summary's contact entries (None, None for models without walls): the largest
-/// penetration over the steps, and each wall's report at the last step.
-fn contact_summary(
+/// The summary's entries from the contributions: for every history column that asks
+/// for it, its largest value over the steps (from 0); and each contribution's entry from
+/// its columns at the last step.
+fn contributions_summary(
     model: &Model,
     records: &[StepRecord],
-) -> (
-    Option<f64>,
-    Option<std::collections::BTreeMap<String, crate::model::contact::WallReport>>,
-) {
-    if model.local.walls.is_empty() {
-        return (None, None);
+) -> BTreeMap<String, serde_json::Value> {
+    let cols = model.columns();
+    let mut out = BTreeMap::new();
+    for (i, c) in cols.iter().enumerate() {
+        if c.run_max {
+            let m = records
+                .iter()
+                .filter_map(|r| r.columns.get(i))
+                .fold(0.0, |a: f64, &b| a.max(b));
+            out.insert(c.name.clone(), serde_json::json!(m));
+        }
     }
-    let pen = records
-        .iter()
-        .filter_map(|r| r.contact.as_ref())
-        .map(|c| c.max_penetration)
-        .fold(0.0, f64::max);
-    let last = records.iter().rev().find_map(|r| r.contact.as_ref());
-    let walls = model
-        .local
-        .walls
-        .iter()
-        .enumerate()
-        .map(|(i, w)| {
-            let rep = last
-                .and_then(|c| c.walls.get(i).copied())
-                .unwrap_or_default();
-            (w.name.clone(), rep)
-        })
-        .collect();
-    (Some(pen), Some(walls))
+    let zeros = vec![0.0; cols.len()];
+    let last = records.last().map_or(&zeros, |r| &r.columns);
+    out.extend(model.summary(last));
+    out
 }
 
 /// `alfe check`: validate and report the model size and partition quality (serial).
 pub fn check(target: &str, ranks: usize) -> Result<String> {
     let src = crate::scene::load(target)?;
-    let def = crate::scene::model(&src)?;
-    let mut s = describe(&def);
+    let scene = crate::scene::read(&src)?;
+    let def = &scene.model;
+    let mut s = describe(def, &scene.run);
     if ranks > 1 {
         let part = crate::partition::partition_elements(&def.mesh, ranks)?;
-        s.push_str(&describe_partition(&def, &part, ranks)?);
+        s.push_str(&describe_partition(def, &part, ranks)?);
     }
     Ok(s)
 }
 
-fn describe(def: &ModelDef) -> String {
+fn describe(def: &ModelDef, run: &RunSettings) -> String {
     let m = &def.mesh;
     let mut kinds = std::collections::BTreeMap::new();
     for k in &m.kinds {
         *kinds.entry(k.name()).or_insert(0usize) += 1;
     }
     let kinds: Vec<String> = kinds.iter().map(|(k, n)| format!("{n} {k}")).collect();
-    let n_con: usize = def.constraints.len();
-    format!(
-        "scene {}: valid\n  units: {}\n  parts: {}\n  nodes: {}\n  elements: {} ({})\n  unknowns: {} (3 per node)\n  constraints: {}, loads: {}\n  node sets: {}\n  surfaces: {}\n  steps: {}\n",
-        def.settings.scene,
-        def.settings.units.describe(),
+    let extra: usize = def
+        .contributions
+        .iter()
+        .map(|c| c.kind().extra_unknowns())
+        .sum();
+    let unknowns = if extra > 0 {
+        format!(
+            "{} ({} node displacements, {extra} multipliers and reference-point DOFs)",
+            3 * m.n_nodes() + extra,
+            3 * m.n_nodes()
+        )
+    } else {
+        format!("{} (3 per node)", 3 * m.n_nodes())
+    };
+    let mut s = format!(
+        "scene {}: valid\n  units: {}\n  parts: {}\n  nodes: {}\n  elements: {} ({})\n  unknowns: {unknowns}\n  supports: {}\n  node sets: {}\n  surfaces: {}\n  steps: {}\n",
+        run.name,
+        run.units.describe(),
         def.part_names.join(", "),
         m.n_nodes(),
         m.n_elems(),
         kinds.join(", "),
-        3 * m.n_nodes(),
-        n_con,
-        def.loads.len(),
+        def.constraints.len(),
         def.node_sets.iter().map(|(k, v)| format!("{k} ({} nodes)", v.len())).collect::<Vec<_>>().join(", "),
         def.surfaces.iter().map(|(k, v)| format!("{k} ({} faces)", v.len())).collect::<Vec<_>>().join(", "),
-        nominal_steps(&def.settings.analysis),
-    )
+        nominal_steps(&run.analysis),
+    );
+    s.push_str(&format!("  contributions: {}\n", def.contributions.len()));
+    for c in &def.contributions {
+        s.push_str(&format!("    {}\n", c.kind().describe()));
+    }
+    s
 }
 
 /// Steps at the deck's step size ("from the mesh" for explicit runs without one).
-fn nominal_steps(a: &crate::scene::deck::AnalysisDeck) -> String {
+fn nominal_steps(a: &Analysis) -> String {
     if a.step > 0.0 {
-        crate::solve::stepping::step_times(a.end_time, a.step)
+        crate::solve::control::step_times(a.end_time, a.step)
             .len()
             .to_string()
     } else {
@@ -557,6 +574,24 @@ fn describe_partition(def: &ModelDef, part: &[u32], ranks: usize) -> Result<Stri
                 .join(",")
         ));
     }
+    for c in &def.contributions {
+        let nodes = c.kind().nodes();
+        if nodes.is_empty() {
+            continue;
+        }
+        let mut rs: Vec<u32> = nodes.iter().map(|&n| owner[n]).collect();
+        rs.sort_unstable();
+        rs.dedup();
+        s.push_str(&format!(
+            "  {} {}: nodes owned by rank(s) {}\n",
+            c.kind().kind_name(),
+            c.kind().name(),
+            rs.iter()
+                .map(|r| r.to_string())
+                .collect::<Vec<_>>()
+                .join(",")
+        ));
+    }
     for (name, nodes) in &def.node_sets {
         let mut rs: Vec<u32> = nodes.iter().map(|&n| owner[n]).collect();
         rs.sort_unstable();
@@ -580,9 +615,9 @@ pub fn partition(target: &str, ranks: usize, dir: &std::path::Path) -> Result<St
         ));
     }
     let src = crate::scene::load(target)?;
-    let def = crate::scene::model(&src)?;
+    let Scene { model: def, run } = crate::scene::read(&src)?;
     let part = crate::partition::partition_elements(&def.mesh, ranks)?;
-    let file = cache::path(dir, &def.settings.scene, ranks);
+    let file = cache::path(dir, &run.name, ranks);
     cache::write(&file, &def.mesh, ranks, &part)?;
     Ok(format!(
         "wrote {}\n{}",

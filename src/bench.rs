@@ -4,12 +4,13 @@
 //! the true residual, which the MPI test of the linear solver relies on.
 
 use crate::app::{on_rank0, peak_rss_mb};
+use crate::linalg::block_jacobi::BlockJacobi;
+use crate::linalg::gmres::{gmres, GmresOptions};
+use crate::model::distribute;
 use crate::model::Model;
 use crate::output::h5::H5File;
 use crate::parallel::Comm;
-use crate::partition::{distribute, partition_elements};
-use crate::solve::linear::block_jacobi::BlockJacobi;
-use crate::solve::linear::gmres::{gmres, GmresOptions};
+use crate::partition::partition_elements;
 use crate::{Error, Result};
 use std::io::Write;
 use std::path::Path;
@@ -77,7 +78,7 @@ pub(crate) fn generated_model(comm: &dyn Comm, text: String, label: &str) -> Res
             dir: ".".into(),
             label: label.into(),
         };
-        let def = crate::scene::model(&src)?;
+        let def = crate::scene::read(&src)?.model;
         let part = partition_elements(&def.mesh, p)?;
         Ok(distribute::split(&def, &part, p))
     })?;
@@ -126,7 +127,7 @@ pub fn bench_linear(
     let mut model = generated_model(comm, deck(cells), "bench-linear")?;
     let setup_s = t_setup.elapsed().as_secs_f64();
     let n = model.n_owned_dofs();
-    let ne_local = model.local.n_elems() as f64;
+    let ne_local = model.solids.len() as f64;
     let u: Vec<f64> = (0..n)
         .map(|i| 1e-6 * ((i * 7919 % 1000) as f64 / 1000.0 - 0.5))
         .collect();
@@ -183,15 +184,15 @@ pub fn bench_linear(
     let mut name = format!("bench-linear-{}.h5", std::process::id()).into_bytes();
     comm.broadcast_bytes(0, &mut name);
     let h5path = dir.join(String::from_utf8_lossy(&name).to_string());
-    let stress = vec![1.0f64; 6 * model.local.n_elems()];
+    let stress = vec![1.0f64; 6 * model.solids.len()];
     comm.barrier();
     let t = Instant::now();
     let bytes = {
         let h5 = H5File::create(comm, &h5path)?;
-        let nn = model.local.n_nodes_global as u64;
-        let nel = model.local.n_elems_global as u64;
-        h5.write_rows_f64("/displacement", nn, 3, model.local.node_start() as u64, &x)?;
-        h5.write_rows_f64("/stress", nel, 6, model.local.elem_start() as u64, &stress)?;
+        let nn = model.mesh.n_nodes_global as u64;
+        let nel = model.mesh.n_elems_global as u64;
+        h5.write_rows_f64("/displacement", nn, 3, model.mesh.node_start() as u64, &x)?;
+        h5.write_rows_f64("/stress", nel, 6, model.mesh.elem_start() as u64, &stress)?;
         h5.flush()?;
         8 * (3 * nn + 6 * nel)
     };
@@ -212,8 +213,8 @@ pub fn bench_linear(
     let out = serde_json::json!({
         "ranks": p,
         "cells": cells,
-        "unknowns": 3 * model.local.n_nodes_global,
-        "elements": model.local.n_elems_global,
+        "unknowns": 3 * model.mesh.n_nodes_global,
+        "elements": model.mesh.n_elems_global,
         "nnz": nnz,
         "setup_s": setup_s,
         "residual_s": t_res,
@@ -263,7 +264,7 @@ pub fn bench_linear(
 fn export_petsc(
     comm: &dyn Comm,
     dir: &Path,
-    k: &crate::solve::linear::matrix::DistMatrix,
+    k: &crate::linalg::matrix::DistMatrix,
     b: &[f64],
 ) -> Result<()> {
     let (ptr, cols, vals) = k.local_csr();

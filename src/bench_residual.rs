@@ -77,7 +77,7 @@ pub fn bench_residual(
         let n = model.n_owned_dofs();
         let u: Vec<f64> = (0..n)
             .map(|i| {
-                let x = model.local.coords[i / 3];
+                let x = model.mesh.coords[i / 3];
                 let c = i % 3;
                 let stretch = [0.02, -0.01, -0.01][c] * x[c];
                 stretch + 2e-3 * (3.0 * x[0] + 2.0 * x[1] - x[2] + c as f64).sin()
@@ -90,11 +90,11 @@ pub fn bench_residual(
         })?;
         let mut k = model.new_matrix(comm);
         let t_jac = time_median(comm, reps, || model.jacobian(comm, &u, 1.0, &mut k))?;
-        let elems = comm.allgather_f64(model.local.n_elems() as f64);
+        let elems = comm.allgather_f64(model.solids.len() as f64);
         let max_elems = elems.iter().cloned().fold(0.0, f64::max);
         rows.push(serde_json::json!({
             "case": label,
-            "elements": model.local.n_elems_global,
+            "elements": model.mesh.n_elems_global,
             "residual_s": t_res,
             "residual_elems_per_s_per_rank": max_elems / t_res,
             "jacobian_s": t_jac,

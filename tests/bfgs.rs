@@ -4,7 +4,7 @@
 //! iteration); distributed over two in-process ranks it reaches the serial answer.
 
 mod common;
-use alfe::app::{setup, solver_options, Phases, RunOptions};
+use alfe::app::{setup, Phases, RunOptions, Setup};
 use alfe::parallel::{run_ranks, Comm, SerialComm};
 use alfe::solve::nonlinear::SolverKind;
 use alfe::solve::stepping::{run_static, RunTotals, StepRecord};
@@ -40,18 +40,25 @@ fn solve_with(
         quiet: true,
         solver: None,
     };
-    let (mut model, _) = setup(comm, &ro, &mut Phases::default()).unwrap();
-    let mut opts = solver_options(&model.local.settings, model.char_length(comm), None);
+    let Setup { mut model, run, .. } = setup(comm, &ro, &mut Phases::default()).unwrap();
+    let mut opts = run.solver.clone();
     opts.kind = kind;
     opts.bfgs_reform = reform;
     let mut u = Vec::new();
     let mut steps = Vec::new();
-    let totals = run_static(comm, &mut model, &mut u, &opts, &mut |rec, _, _| {
-        steps.push(rec.clone());
-        Ok(())
-    })
+    let totals = run_static(
+        comm,
+        &mut model,
+        &mut u,
+        &run.analysis,
+        &opts,
+        &mut |rec, _, _| {
+            steps.push(rec.clone());
+            Ok(())
+        },
+    )
     .unwrap();
-    let l = &model.local;
+    let l = &model.mesh;
     let u = (0..l.n_owned())
         .map(|i| {
             (

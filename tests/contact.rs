@@ -140,20 +140,19 @@ step = 0.5
 #[test]
 fn contact_patch_test_uniform_pressure() {
     let out = run_deck("patch-alm", PATCH);
-    let n = out.model.local.n_owned();
-    let f = out.model.contact.nodal_fields(n);
-    let bottom = &out.model.local.node_sets["bottom"];
+    let (pressure, gap) = (field(&out, "contact_pressure"), field(&out, "contact_gap"));
+    let bottom = &out.model.mesh.node_sets["bottom"];
     assert_eq!(bottom.len(), 25);
     let mut worst = 0.0f64;
     for &b in bottom {
         // The follower pressure acts on the deformed top face: the nominal pressure on
         // the reference area is p · (deformed area / reference area) = p λ_x λ_y, and
         // the same force reaches the floor.
-        worst = worst.max((f.pressure[b] - f.pressure[bottom[0]]).abs());
-        assert!(f.gap[b].abs() < 1e-12, "gap {}", f.gap[b]);
+        worst = worst.max((pressure[b] - pressure[bottom[0]]).abs());
+        assert!(gap[b].abs() < 1e-12, "gap {}", gap[b]);
     }
     assert!(
-        worst < 1e-10 * f.pressure[bottom[0]],
+        worst < 1e-10 * pressure[bottom[0]],
         "pressure not uniform: spread {worst:e}"
     );
     // Equilibrium: the wall carries the applied load (pressure on the deformed top).
@@ -338,14 +337,13 @@ fn hertz_force_and_contact_radius() {
     }
     assert!(pen.iter().all(|&p| p < 1e-6 * 1.3), "{pen:?}");
     // Contact radius at d = 1 from the pressure profile.
-    let n = out.model.local.n_owned();
-    let f = out.model.contact.nodal_fields(n);
+    let pressure = field(&out, "contact_pressure");
     let (mut s, mut rows) = ([0.0f64; 5], 0);
-    for i in 0..n {
-        if f.pressure[i] > 0.0 {
-            let x = out.model.local.coords[i];
+    for (i, &p) in pressure.iter().enumerate() {
+        if p > 0.0 {
+            let x = out.model.mesh.coords[i];
             let r2 = (x[0] + out.u[3 * i]).powi(2) + (x[1] + out.u[3 * i + 1]).powi(2);
-            let p2 = f.pressure[i].powi(2);
+            let p2 = p.powi(2);
             // Least squares p² = c0 + c1 r².
             s[0] += 1.0;
             s[1] += r2;

@@ -369,12 +369,17 @@ fn moving_penalty_wall_displacement_and_penetration() {
             .iter()
             .all(|l| f64s(l) == [0.0; 3]));
     }
-    let from_records = o
-        .steps
+    let col = o
+        .model
+        .columns()
         .iter()
-        .map(|r| r.contact.as_ref().unwrap().max_penetration)
-        .fold(0.0, f64::max);
-    assert_eq!(o.summary.max_penetration, Some(from_records));
+        .position(|c| c.name == "max_penetration")
+        .unwrap();
+    let from_records = o.steps.iter().map(|r| r.columns[col]).fold(0.0, f64::max);
+    assert_eq!(
+        o.summary.contributions["max_penetration"].as_f64(),
+        Some(from_records)
+    );
     assert!((from_records - max_pen).abs() < 1e-12 * max_pen);
 }
 
@@ -382,8 +387,8 @@ fn moving_penalty_wall_displacement_and_penetration() {
 fn no_walls_no_contact_output() {
     let text = common::builtin("cube-stretch");
     let (o, out) = run_in("contact-output-none", &text, None);
-    assert!(o.summary.max_penetration.is_none() && o.summary.walls.is_none());
-    assert!(o.steps.iter().all(|r| r.contact.is_none()));
+    assert!(o.summary.contributions.is_empty());
+    assert!(o.steps.iter().all(|r| r.columns.is_empty()));
     let (head, _) = history(&out);
     assert!(!head
         .iter()

@@ -92,7 +92,7 @@ fn j2_cube_uniaxial_tension_matches_closed_form() {
         "the path must be plastic: {plastic_steps}"
     );
     // The equivalent plastic strain the output carries is the closed-form one.
-    let ep = out.model.plastic_strains();
+    let ep = out.model.solids.plastic_strains();
     let tau = (sy + h * 1.5f64.ln()) / (1.0 + h / e);
     let want = 1.5f64.ln() - tau / e;
     for v in ep {
@@ -169,7 +169,7 @@ fn plastic_bar_reaches_large_plastic_strain() {
     assert!(out.summary.converged, "{:?}", out.summary);
     let last = out.steps.last().unwrap();
     assert_eq!(last.time, 1.0);
-    let ep = out.model.plastic_strains();
+    let ep = out.model.solids.plastic_strains();
     let max = ep.iter().cloned().fold(0.0, f64::max);
     let min = ep.iter().cloned().fold(f64::INFINITY, f64::min);
     assert!(max > 0.4 && min > 0.05, "ε̄p in [{min}, {max}]");

@@ -3,7 +3,11 @@
 //! uniaxial compression carries the exact load, and bad fields are named.
 
 mod common;
-use alfe::scene::{build, deck, model, Source};
+use alfe::scene::{build, deck, read, Source};
+
+fn model(src: &Source) -> alfe::Result<alfe::model::def::ModelDef> {
+    read(src).map(|s| s.model)
+}
 use common::*;
 use std::f64::consts::PI;
 use std::path::PathBuf;

@@ -4,8 +4,8 @@
 //! product against the assembled Jacobian.
 
 mod common;
+use alfe::linalg::LinearOperator;
 use alfe::parallel::{Comm, SerialComm};
-use alfe::solve::linear::LinearOperator;
 use alfe::solve::nonlinear::jfnk::FdJacobian;
 use alfe::solve::nonlinear::{FdRule, NonlinearProblem, SolverKind};
 use alfe::solve::stepping::StaticProblem;

@@ -6,7 +6,7 @@
 // Index loops over 3×3 frames read like the formulas.
 #![allow(clippy::needless_range_loop)]
 
-use crate::model::def::Curve;
+use crate::curve::Curve;
 use serde::{Deserialize, Serialize};
 
 /// x_global = origin + R x_local.
@@ -112,29 +112,10 @@ pub struct RigidMotion {
     pub rotation: Option<Rotation>,
 }
 
-/// ∫₀ᵗ c(τ) dτ of a piecewise-linear curve held constant outside its points.
-pub fn curve_integral(c: &Curve, t: f64) -> f64 {
-    let p = &c.points;
-    let mut s = 0.0;
-    let mut prev = (0.0, c.eval(0.0));
-    let mut knots: Vec<f64> = p
-        .iter()
-        .map(|q| q[0])
-        .filter(|&x| x > 0.0 && x < t)
-        .collect();
-    knots.push(t);
-    for x in knots {
-        let y = c.eval(x);
-        s += 0.5 * (prev.1 + y) * (x - prev.0);
-        prev = (x, y);
-    }
-    s
-}
-
 fn scale(kind: MotionKind, c: &Curve, t: f64) -> f64 {
     match kind {
         MotionKind::Displacement => c.eval(t),
-        MotionKind::Velocity => curve_integral(c, t),
+        MotionKind::Velocity => c.integral(t),
     }
 }
 
@@ -193,16 +174,6 @@ impl RigidMotion {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn velocity_curves_integrate_exactly() {
-        let c = Curve {
-            points: vec![[0.0, 0.0], [1.0, 2.0], [3.0, 2.0]],
-        };
-        assert!((curve_integral(&c, 0.5) - 0.25).abs() < 1e-14);
-        assert!((curve_integral(&c, 2.0) - 3.0).abs() < 1e-14);
-        assert!((curve_integral(&c, 4.0) - 7.0).abs() < 1e-14);
-    }
 
     #[test]
     fn pose_moves_and_turns() {

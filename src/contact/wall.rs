@@ -1,8 +1,8 @@
-//! Rigid walls as the model holds them: a shape, its placement and prescribed motion,
-//! friction, the enforcement method and the tracked nodes (node-to-surface, one way,
-//! as the paper's rigid walls).
+//! What a rigid surface is in contact: its shape as a deck names it, the enforcement
+//! method, and the projection of a point onto the placed shape (gap, frame, the surface
+//! point and where it was at the start of the step).
 
-use super::motion::{Pose, RigidMotion};
+use super::motion::Pose;
 use super::shape::{Cylinder, FinitePlane, Plane, Prism, Projection, Shape, Sphere};
 use serde::{Deserialize, Serialize};
 
@@ -53,27 +53,6 @@ impl ContactMethod {
             Self::Penalty => "penalty",
         }
     }
-}
-
-/// A rigid wall of the model. `nodes` are global node numbers in a [`crate::model::def::ModelDef`]
-/// and owned local node indices in a [`crate::partition::distribute::LocalModel`].
-#[derive(Debug, Clone, Serialize, Deserialize)]
-pub struct WallDef {
-    pub name: String,
-    pub shape: ShapeDef,
-    pub motion: RigidMotion,
-    /// Coulomb friction coefficient μ.
-    pub friction: f64,
-    pub method: ContactMethod,
-    /// ALM scale κ (force per length); None = from the stiffness at each node.
-    pub kappa: Option<f64>,
-    /// Penalty stiffness as a multiple of the nodal stiffness (LS-DYNA's SLSFAC idea).
-    pub penalty_scale: f64,
-    /// The tracked node set's name (for messages).
-    pub set: String,
-    pub nodes: Vec<usize>,
-    /// Tributary area of each tracked node on the tracked surface (0 where unknown).
-    pub areas: Vec<f64>,
 }
 
 /// A projection in global coordinates.

@@ -40,6 +40,43 @@ pub fn nodes_of_faces(mesh: &Mesh, faces: &[FaceRef]) -> Vec<usize> {
     out
 }
 
+/// Area of a flat boundary face from its corners (quad: half the diagonals' cross
+/// product; triangle: half the edges').
+pub fn face_area(x: &[[f64; 3]]) -> f64 {
+    let sub = |a: [f64; 3], b: [f64; 3]| [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
+    let cross_norm = |a: [f64; 3], b: [f64; 3]| {
+        let c = [
+            a[1] * b[2] - a[2] * b[1],
+            a[2] * b[0] - a[0] * b[2],
+            a[0] * b[1] - a[1] * b[0],
+        ];
+        (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt()
+    };
+    match x.len() {
+        4 => 0.5 * cross_norm(sub(x[2], x[0]), sub(x[3], x[1])),
+        3 => 0.5 * cross_norm(sub(x[1], x[0]), sub(x[2], x[0])),
+        _ => 0.0,
+    }
+}
+
+/// Each node's tributary area on the given faces: every face's area split equally
+/// among its nodes.
+pub fn tributary_areas<'a>(
+    mesh: &Mesh,
+    faces: impl IntoIterator<Item = &'a FaceRef>,
+) -> std::collections::BTreeMap<usize, f64> {
+    let mut area = std::collections::BTreeMap::new();
+    for &f in faces {
+        let nodes = mesh.face_nodes(f);
+        let x: Vec<[f64; 3]> = nodes.iter().map(|&n| mesh.coords[n]).collect();
+        let a = face_area(&x) / nodes.len() as f64;
+        for n in nodes {
+            *area.entry(n).or_default() += a;
+        }
+    }
+    area
+}
+
 /// The bounding box of the mesh (zeros for an empty mesh).
 pub fn bounding_box(mesh: &Mesh) -> ([f64; 3], [f64; 3]) {
     if mesh.coords.is_empty() {

@@ -1,10 +1,11 @@
 //! The serial model definition: what a validated deck resolves to on rank 0 before
-//! partitioning (whole mesh, resolved sets, materials, constraints, loads, settings).
+//! partitioning — the whole mesh, resolved sets, materials, supports, and the list of
+//! contribution definitions ([`ContributionDef`]: loads, walls, couplings) that every
+//! rank turns into its [`super::Contribution`]s.
 
 use crate::fem::element::Formulation;
 use crate::material::{Hardening, J2Plasticity, LinearElastic, Material, MooneyRivlin, NeoHookean};
 use crate::mesh::{FaceRef, Mesh};
-use crate::scene::deck::{AnalysisDeck, OutputDeck, SolverDeck, Units};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 
@@ -75,33 +76,7 @@ impl MaterialDef {
     }
 }
 
-/// Piecewise-linear curve, constant beyond its ends.
-#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
-pub struct Curve {
-    pub points: Vec<[f64; 2]>,
-}
-
-impl Curve {
-    /// The default load curve: 0 at t = 0 rising linearly to 1 at `end`.
-    pub fn ramp(end: f64) -> Self {
-        Self {
-            points: vec![[0.0, 0.0], [end, 1.0]],
-        }
-    }
-    pub fn eval(&self, t: f64) -> f64 {
-        let p = &self.points;
-        if t <= p[0][0] {
-            return p[0][1];
-        }
-        for w in p.windows(2) {
-            if t <= w[1][0] {
-                let s = (t - w[0][0]) / (w[1][0] - w[0][0]);
-                return w[0][1] + s * (w[1][1] - w[0][1]);
-            }
-        }
-        p[p.len() - 1][1]
-    }
-}
+pub use crate::curve::Curve;
 
 /// Displacement constraint on a node set: component c (where `comps[c]`) follows
 /// `motion`, scaled in time by `curve`.
@@ -154,41 +129,6 @@ impl Constraint {
 }
 
 #[derive(Debug, Clone, Serialize, Deserialize)]
-pub enum Load {
-    /// Per-node force on a node set.
-    Nodal {
-        set: String,
-        force: [f64; 3],
-        curve: Curve,
-    },
-    /// Dead traction on a surface (per reference area).
-    Traction {
-        surface: String,
-        traction: [f64; 3],
-        curve: Curve,
-    },
-    /// Follower pressure on a surface.
-    Pressure {
-        surface: String,
-        pressure: f64,
-        curve: Curve,
-    },
-}
-
-#[derive(Debug, Clone, Serialize, Deserialize)]
-pub struct Settings {
-    pub scene: String,
-    pub units: Units,
-    pub analysis: AnalysisDeck,
-    pub solver: SolverDeck,
-    pub output: OutputDeck,
-    /// Initial velocities of dynamic runs: (node set, velocity), later entries win.
-    /// A `part` in the deck is a node set named `part:<name>`.
-    #[serde(default)]
-    pub initial_velocity: Vec<(String, [f64; 3])>,
-}
-
-#[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct ModelDef {
     pub mesh: Mesh,
     pub part_names: Vec<String>,
@@ -200,12 +140,16 @@ pub struct ModelDef {
     pub node_sets: BTreeMap<String, Vec<usize>>,
     pub surfaces: BTreeMap<String, Vec<FaceRef>>,
     pub constraints: Vec<Constraint>,
-    pub loads: Vec<Load>,
     /// Node sets whose reaction forces are reported, in column order.
     pub reaction_sets: Vec<String>,
-    /// Rigid walls (tracked nodes by global node number).
-    pub walls: Vec<crate::contact::wall::WallDef>,
-    pub settings: Settings,
+    /// Node sets whose mean displacement is reported, in column order.
+    pub displacement_sets: Vec<String>,
+    /// Initial velocities of dynamic runs: (node set, velocity), later entries win.
+    /// A `part` in the deck is a node set named `part:<name>`.
+    pub initial_velocity: Vec<(String, [f64; 3])>,
+    /// Loads, walls, couplings: everything else the model is made of, in deck order by
+    /// kind (global node numbers).
+    pub contributions: Vec<ContributionDef>,
 }
 
 impl ModelDef {
@@ -216,6 +160,90 @@ impl ModelDef {
     pub fn elem_formulation(&self, e: usize) -> Formulation {
         self.part_formulation[self.mesh.elem_part[e] as usize]
     }
+}
+
+/// Every rank's view of the partition while it localizes a definition.
+pub struct Localizer<'a> {
+    pub rank: usize,
+    pub ranks: usize,
+    /// Owning rank of every global node (the user's numbering).
+    pub owner: &'a [u32],
+    /// This rank's local index of every global node, or `usize::MAX`.
+    pub local_of: &'a [usize],
+}
+
+impl Localizer<'_> {
+    /// The local index of a node this rank owns.
+    pub fn owned(&self, node: usize) -> Option<usize> {
+        (self.owner[node] as usize == self.rank).then(|| self.local_of[node])
+    }
+}
+
+/// What a kind of contribution definition does (see [`super::contribution`] on adding
+/// one). Definitions hold global node numbers; `localize` gives one rank's share with
+/// local node indices, which `build` turns into the runtime contribution.
+pub trait ContributionKind {
+    /// What kind it is ("wall", "coupling", ...).
+    fn kind_name(&self) -> &'static str;
+    /// Its deck name.
+    fn name(&self) -> &str;
+    /// One line for `alfe check`.
+    fn describe(&self) -> String;
+    /// The nodes it acts on (global numbers; for `alfe check`).
+    fn nodes(&self) -> Vec<usize> {
+        Vec::new()
+    }
+    /// Scalar unknowns it adds to the model (multipliers, reference-point DOFs).
+    fn extra_unknowns(&self) -> usize {
+        0
+    }
+    /// Node stencils: nodes coupled by one piece of the contribution, evaluated on the
+    /// owner of the first (global numbers). They add edges to the partition graph and
+    /// ghost nodes on the evaluating rank.
+    fn stencils(&self) -> Vec<Vec<usize>> {
+        Vec::new()
+    }
+    /// This rank's share (local node indices).
+    fn localize(&self, l: &Localizer) -> ContributionDef;
+    /// The runtime contribution on this rank, from its localized definition.
+    fn build(&self, local: &super::distribute::LocalModel) -> Box<dyn super::Contribution>;
+    /// Whether it can take part in an explicit analysis (else why not).
+    fn explicit_ok(&self) -> Result<(), String> {
+        Ok(())
+    }
+    /// `--contact alm|penalty`: switch its enforcement, if it has one.
+    fn set_contact_method(&mut self, _m: crate::contact::wall::ContactMethod) {}
+}
+
+/// Registers the kinds of contribution definitions: one line per kind.
+macro_rules! contribution_kinds {
+    ($($variant:ident($ty:ty)),* $(,)?) => {
+        /// A contribution's definition, of any kind. (A model has a few of them: their
+        /// sizes do not matter.)
+        #[derive(Debug, Clone, Serialize, Deserialize)]
+        #[allow(clippy::large_enum_variant)]
+        pub enum ContributionDef {
+            $($variant($ty)),*
+        }
+        impl ContributionDef {
+            pub fn kind(&self) -> &dyn ContributionKind {
+                match self {
+                    $(ContributionDef::$variant(d) => d),*
+                }
+            }
+            pub fn kind_mut(&mut self) -> &mut dyn ContributionKind {
+                match self {
+                    $(ContributionDef::$variant(d) => d),*
+                }
+            }
+        }
+    };
+}
+
+contribution_kinds! {
+    Load(super::loads::LoadDef),
+    Wall(super::walls::WallDef),
+    Coupling(super::coupling::CouplingDef),
 }
 
 #[cfg(test)]
@@ -240,15 +268,5 @@ mod tests {
             "{u:?}"
         );
         assert!(c.value([2.0, 0.0, 5.0], 0, 0.0).abs() < 1e-15);
-    }
-    #[test]
-    fn curve_interpolates_and_clamps() {
-        let c = Curve {
-            points: vec![[0.0, 0.0], [1.0, 2.0], [2.0, 2.0]],
-        };
-        assert_eq!(c.eval(-1.0), 0.0);
-        assert!((c.eval(0.25) - 0.5).abs() < 1e-15);
-        assert_eq!(c.eval(1.5), 2.0);
-        assert_eq!(c.eval(9.0), 2.0);
     }
 }

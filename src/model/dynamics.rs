@@ -7,8 +7,8 @@
 
 use super::Model;
 use crate::fem::mass::{consistent_mass, lumped_mass, max_frequency};
+use crate::linalg::matrix::DistMatrix;
 use crate::parallel::Comm;
-use crate::solve::linear::matrix::DistMatrix;
 use crate::{Error, Result};
 
 /// The mass operator of a dynamic run.
@@ -36,38 +36,41 @@ pub struct StableStep {
 
 impl Model {
     fn elem_x0(&self, e: usize, x0: &mut [[f64; 3]; 8]) -> usize {
-        let nodes = self.local.elem_nodes(e);
+        let nodes = self.solids.elements.nodes(e);
         for (a, &n) in nodes.iter().enumerate() {
-            x0[a] = self.local.coords[n];
+            x0[a] = self.mesh.coords[n];
         }
         nodes.len()
     }
 
     fn density(&self, e: usize) -> f64 {
-        self.materials[self.local.elem_material[e] as usize].density()
+        self.solids.material(e).density()
     }
 
     /// Lumped (row-sum) mass on owned dofs, ghost contributions summed (collective).
+    /// Unknowns other than node displacements (multipliers, reference points) carry no
+    /// mass.
     pub fn lumped_mass(&self, comm: &dyn Comm) -> Vec<f64> {
-        let mut m = vec![0.0; 3 * self.local.n_local_nodes()];
+        let mut m = vec![0.0; self.dofs.n_local_dofs()];
         let mut x0 = [[0.0; 3]; 8];
         let mut me = [0.0; 8];
-        for e in 0..self.local.n_elems() {
+        for e in 0..self.solids.len() {
             let n = self.elem_x0(e, &mut x0);
-            lumped_mass(self.local.kinds[e], &x0[..n], self.density(e), &mut me[..n]);
-            for (a, &node) in self.local.elem_nodes(e).iter().enumerate() {
+            lumped_mass(
+                self.solids.elements.kinds[e],
+                &x0[..n],
+                self.density(e),
+                &mut me[..n],
+            );
+            for (a, &node) in self.solids.elements.nodes(e).iter().enumerate() {
                 for c in 0..3 {
                     m[3 * node + c] += me[a];
                 }
             }
         }
-        let no = self.n_node_dofs();
-        let (own, ghost) = m.split_at_mut(no);
-        self.halo.reverse_add(comm, ghost, own);
-        // Multipliers carry no mass.
-        m.truncate(no);
-        m.resize(self.n_owned_dofs(), 0.0);
-        m
+        let mut owned = vec![0.0; self.n_owned_dofs()];
+        self.dofs.sum_to_owned(comm, &m, &mut owned);
+        owned
     }
 
     /// out = M v on owned dofs (collective for the consistent mass).
@@ -84,15 +87,15 @@ impl Model {
                 let mut f = vec![0.0; vl.len()];
                 let mut x0 = [[0.0; 3]; 8];
                 let mut me = [0.0; 64];
-                for e in 0..self.local.n_elems() {
+                for e in 0..self.solids.len() {
                     let n = self.elem_x0(e, &mut x0);
                     consistent_mass(
-                        self.local.kinds[e],
+                        self.solids.elements.kinds[e],
                         &x0[..n],
                         self.density(e),
                         &mut me[..n * n],
                     );
-                    let nodes = self.local.elem_nodes(e);
+                    let nodes = self.solids.elements.nodes(e);
                     for (a, &na) in nodes.iter().enumerate() {
                         for (b, &nb) in nodes.iter().enumerate() {
                             let m = me[a * n + b];
@@ -102,11 +105,7 @@ impl Model {
                         }
                     }
                 }
-                let no = self.n_node_dofs();
-                let (own, ghost) = f.split_at_mut(no);
-                self.halo.reverse_add(comm, ghost, own);
-                out[..no].copy_from_slice(own);
-                out[no..].iter_mut().for_each(|x| *x = 0.0);
+                self.dofs.sum_to_owned(comm, &f, out);
             }
         }
     }
@@ -115,8 +114,8 @@ impl Model {
     pub fn add_mass(&self, comm: &dyn Comm, mass: &MassMatrix, scale: f64, k: &mut DistMatrix) {
         match mass {
             MassMatrix::Lumped(m) => {
-                for i in 0..self.local.n_owned() {
-                    let b = self.node_block[i];
+                for i in 0..self.mesh.n_owned() {
+                    let b = self.dofs.global_block(i);
                     let d = scale * m[3 * i];
                     k.add_block(b, b, &[d, 0.0, 0.0, 0.0, d, 0.0, 0.0, 0.0, d]);
                 }
@@ -126,10 +125,10 @@ impl Model {
                 let mut me = [0.0; 64];
                 let mut ke = [0.0; 576];
                 let mut blocks = [0usize; 8];
-                for e in 0..self.local.n_elems() {
+                for e in 0..self.solids.len() {
                     let n = self.elem_x0(e, &mut x0);
                     consistent_mass(
-                        self.local.kinds[e],
+                        self.solids.elements.kinds[e],
                         &x0[..n],
                         self.density(e),
                         &mut me[..n * n],
@@ -143,8 +142,8 @@ impl Model {
                             }
                         }
                     }
-                    for (a, &node) in self.local.elem_nodes(e).iter().enumerate() {
-                        blocks[a] = self.node_block[node];
+                    for (a, &node) in self.solids.elements.nodes(e).iter().enumerate() {
+                        blocks[a] = self.dofs.global_block(node);
                     }
                     k.add_element(&blocks[..n], &ke[..w * w]);
                 }
@@ -161,34 +160,34 @@ impl Model {
         // minimum dt, then the owner of the minimum reports L and c_d (second reduction
         // of two numbers; cheap and only at start-up).
         let mut best = (f64::INFINITY, 0.0, 0.0);
-        let mut elements = Vec::with_capacity(self.local.n_elems());
+        let mut elements = Vec::with_capacity(self.solids.len());
         let mut failure = None;
         let mut x0 = [[0.0; 3]; 8];
-        for e in 0..self.local.n_elems() {
+        let el = &self.solids.elements;
+        for e in 0..self.solids.len() {
             let n = self.elem_x0(e, &mut x0);
-            let mat = self.materials[self.local.elem_material[e] as usize].as_ref();
-            let (s0, s1) = (self.state_offset[e], self.state_offset[e + 1]);
+            let mat = self.solids.material(e);
             match max_frequency(
-                self.local.kinds[e],
-                self.local.elem_formulation[e],
+                el.kinds[e],
+                el.formulation[e],
                 &x0[..n],
                 mat,
-                &self.state_old[s0..s1],
+                self.solids.history(e),
             ) {
                 Ok(w) => {
                     let cd = ((mat.bulk_modulus() + 4.0 / 3.0 * mat.shear_modulus())
                         / mat.density())
                     .sqrt();
                     let dt = 2.0 / w;
-                    let t = crate::fem::element::thickness(self.local.kinds[e], &x0[..n])
-                        .unwrap_or(f64::NAN);
+                    let t =
+                        crate::fem::element::thickness(el.kinds[e], &x0[..n]).unwrap_or(f64::NAN);
                     elements.push((dt, t));
                     if dt < best.0 {
                         best = (dt, cd * dt, cd);
                     }
                 }
                 Err(why) => {
-                    failure.get_or_insert(format!("element {}: {why}", self.local.orig_elem[e]));
+                    failure.get_or_insert(format!("element {}: {why}", el.orig[e]));
                 }
             }
         }
@@ -231,17 +230,18 @@ impl Model {
         let mut x = [[0.0; 3]; 8];
         let mut dt = f64::INFINITY;
         for (e, &(dt_e, t_ref)) in reference.elements.iter().enumerate() {
-            let nodes = self.local.elem_nodes(e);
+            let nodes = self.solids.elements.nodes(e);
             for (a, &nd) in nodes.iter().enumerate() {
-                let c = self.local.coords[nd];
+                let c = self.mesh.coords[nd];
                 x[a] = [
                     c[0] + u_local[3 * nd],
                     c[1] + u_local[3 * nd + 1],
                     c[2] + u_local[3 * nd + 2],
                 ];
             }
-            let ratio = crate::fem::element::thickness(self.local.kinds[e], &x[..nodes.len()])
-                .map_or(0.0, |t| (t / t_ref).min(1.0));
+            let ratio =
+                crate::fem::element::thickness(self.solids.elements.kinds[e], &x[..nodes.len()])
+                    .map_or(0.0, |t| (t / t_ref).min(1.0));
             dt = dt.min(dt_e * ratio);
         }
         let mut m = [-dt];
@@ -251,16 +251,10 @@ impl Model {
 
     /// Initial velocity on owned dofs from the deck's `[[initial_velocity]]`.
     pub fn initial_velocity(&self) -> Vec<f64> {
-        let no = self.local.n_owned();
+        let no = self.mesh.n_owned();
         let mut v = vec![0.0; self.n_owned_dofs()];
-        for (set, vel) in &self.local.settings.initial_velocity {
-            for &n in self
-                .local
-                .node_sets
-                .get(set)
-                .map(|s| s.as_slice())
-                .unwrap_or(&[])
-            {
+        for (set, vel) in &self.initial_velocity {
+            for &n in self.mesh.set(set) {
                 if n < no {
                     v[3 * n..3 * n + 3].copy_from_slice(vel);
                 }
@@ -269,21 +263,17 @@ impl Model {
         v
     }
 
-    /// Mean displacement of each named node set over all ranks (one reduction).
-    pub fn mean_displacements(&self, comm: &dyn Comm, u: &[f64], sets: &[String]) -> Vec<[f64; 3]> {
+    /// Mean displacement of each of the model's displacement sets over all ranks (one
+    /// reduction).
+    pub fn mean_displacements(&self, comm: &dyn Comm, u: &[f64]) -> Vec<[f64; 3]> {
+        let sets = &self.displacement_sets;
         if sets.is_empty() {
             return Vec::new();
         }
-        let no = self.local.n_owned();
+        let no = self.mesh.n_owned();
         let mut s = vec![0.0; 4 * sets.len()];
         for (i, name) in sets.iter().enumerate() {
-            for &n in self
-                .local
-                .node_sets
-                .get(name)
-                .map(|v| v.as_slice())
-                .unwrap_or(&[])
-            {
+            for &n in self.mesh.set(name) {
                 if n < no {
                     for c in 0..3 {
                         s[4 * i + c] += u[3 * n + c];

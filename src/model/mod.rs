@@ -1,52 +1,59 @@
-//! The distributed finite-element problem on one rank: element loops over local
-//! elements, ghost contributions summed on owners, constraints, loads and reactions.
-//! It knows physics and calls the parallel layer only through [`Comm`] and plans.
+//! The distributed finite-element problem on one rank: a list of contributions
+//! ([`contribution`]) over one unknown map ([`dofs`]). Every evaluation runs all
+//! contributions on local data, then sums ghost entries on their owners once; supports
+//! (prescribed node displacements), reactions, set probes, history columns, output fields
+//! and the summary are read off the same list. It knows physics and calls the parallel
+//! layer only through [`Comm`], the unknown map and the distributed matrix.
 
-pub mod contact;
+pub mod contribution;
+pub mod coupling;
 pub mod def;
+pub mod distribute;
+pub mod dofs;
 pub mod dynamics;
+pub mod loads;
+pub mod solids;
+pub mod walls;
 
-use crate::fem::element::{element_force, element_stress, n_gauss};
-use crate::fem::surface::{pressure_face, traction_face};
-use crate::material::Material;
-use crate::model::def::Load;
-use crate::parallel::{Comm, HaloPlan, Layout};
-use crate::partition::distribute::LocalModel;
-use crate::solve::linear::matrix::DistMatrix;
+pub use contribution::Contribution;
+
+use contribution::{Column, Evaluation, FieldSpec, GridSpec, Reduce, Reference, State};
+use def::Constraint;
+use distribute::{LocalMesh, LocalModel};
+use dofs::DofMap;
+use solids::Solids;
+
+use crate::linalg::DistMatrix;
+use crate::parallel::Comm;
 use crate::{Error, Result};
+use std::collections::BTreeMap;
 
-/// Unknowns are numbered in triples ("blocks"): each rank's range holds one block per
-/// owned node (its displacement), then one block per owned node tracked by an ALM wall
-/// (its multipliers λ_N, λ_T1, λ_T2); rigid-body DOFs will follow (DESIGN.md). Local
-/// vectors over owned + ghost nodes (`u_local`) hold node dofs only: owned nodes, then
-/// ghosts; multipliers are never ghosted (their rows couple only to their own node).
 pub struct Model {
-    pub local: LocalModel,
-    pub materials: Vec<Box<dyn Material>>,
-    /// Block (node) ownership: rank r owns blocks [start, end).
-    pub blocks: Layout,
-    /// Scalar unknown ownership (3 per block).
-    pub dofs: Layout,
-    /// Ghost exchange of scalar dofs of ghost nodes.
-    pub halo: HaloPlan,
-    /// Global block of each local node.
-    pub node_block: Vec<usize>,
-    /// Constrained local dofs (owned and ghost) with the constraint that sets them.
-    constrained_local: Vec<(usize, usize)>,
-    /// Owned constrained dofs (local scalar index) with their constraint.
-    pub constrained_owned: Vec<(usize, usize)>,
-    /// Per element offset into the history arrays.
-    state_offset: Vec<usize>,
-    state_old: Vec<f64>,
-    state_new: Vec<f64>,
-    /// Owned nodes of each reaction set.
+    /// This rank's nodes and sets.
+    pub mesh: LocalMesh,
+    /// The unknown map.
+    pub dofs: DofMap,
+    /// The solid elements: the first contribution, also reached by type (mass, stable
+    /// step, output mesh).
+    pub solids: Solids,
+    /// Everything else, in the definitions' order: loads, walls, couplings.
+    pub contributions: Vec<Box<dyn Contribution>>,
+    constraints: Vec<Constraint>,
+    /// Owned constrained node dofs (owned index) with the constraint that sets them.
+    constrained_owned: Vec<(usize, usize)>,
+    /// Local node dofs (owned and ghost) with a constraint.
+    n_constrained_local: usize,
+    /// Reaction sets (names) and their owned nodes.
+    pub reaction_sets: Vec<String>,
     reaction_nodes: Vec<Vec<usize>>,
-    /// Work vector over local dofs (owned + ghost).
+    pub displacement_sets: Vec<String>,
+    pub initial_velocity: Vec<(String, [f64; 3])>,
+    /// The history columns of the contributions (merged: shared ones last) and where
+    /// each contribution's columns go.
+    columns: Vec<Column>,
+    column_map: Vec<Vec<usize>>,
+    /// Work vector over local dofs.
     work: Vec<f64>,
-    /// Total element evaluations (for rates).
-    pub element_evaluations: u64,
-    /// Rigid walls and their tracked nodes on this rank.
-    pub contact: contact::Contact,
 }
 
 /// What a residual evaluation reports besides the residual.
@@ -56,55 +63,40 @@ pub struct ResidualInfo {
     pub f_ref: f64,
 }
 
+/// An output field with this rank's rows.
+#[derive(Debug, Clone)]
+pub struct Field {
+    pub spec: FieldSpec,
+    pub values: Vec<f64>,
+}
+
 impl Model {
-    /// Collective: build plans, material objects and history storage.
+    /// Collective: build the contributions, the unknown map, the material history and,
+    /// if any contribution wants it, the reference stiffness scales.
     pub fn new(comm: &dyn Comm, local: LocalModel) -> Result<Self> {
-        let n_mult = contact::Contact::n_mult_blocks(&local.walls);
-        let mults = Layout::gather(comm, n_mult);
-        let nodes = Layout::from_counts(&local.owned_nodes_per_rank, local.rank);
-        let block_counts: Vec<usize> = (0..nodes.size())
-            .map(|r| nodes.starts[r + 1] - nodes.starts[r] + mults.starts[r + 1] - mults.starts[r])
-            .collect();
-        let blocks = Layout::from_counts(&block_counts, local.rank);
-        let dof_counts: Vec<usize> = block_counts.iter().map(|c| 3 * c).collect();
-        let dofs = Layout::from_counts(&dof_counts, local.rank);
-        // A node's block: its owner's first block plus its place among the owner's nodes.
-        let node_block: Vec<usize> = (0..local.n_local_nodes())
-            .map(|n| {
-                let g = local.global_node(n);
-                let q = nodes.owner(g);
-                blocks.starts[q] + g - nodes.starts[q]
-            })
-            .collect();
-        let ghost_dofs: Vec<usize> = node_block[local.n_owned()..]
+        let contributions: Vec<Box<dyn Contribution>> = local
+            .contributions
             .iter()
-            .flat_map(|&b| (0..3).map(move |c| 3 * b + c))
+            .map(|d| d.kind().build(&local))
             .collect();
-        let halo = HaloPlan::new(comm, &dofs, ghost_dofs);
-        let contact = contact::Contact::new(
-            &local.walls,
-            &local.coords,
-            3 * local.n_owned(),
-            blocks.start() + local.n_owned(),
-        );
-        let materials: Vec<Box<dyn Material>> =
-            local.materials.iter().map(|(_, m)| m.build()).collect();
-        let mut state_offset = Vec::with_capacity(local.n_elems() + 1);
-        let mut s = 0;
-        for e in 0..local.n_elems() {
-            state_offset.push(s);
-            s += n_gauss(local.kinds[e]) * materials[local.elem_material[e] as usize].n_state();
-        }
-        state_offset.push(s);
+        let LocalModel {
+            mesh,
+            elements,
+            materials,
+            constraints,
+            reaction_sets,
+            displacement_sets,
+            initial_velocity,
+            ..
+        } = local;
+        let solids = Solids::new(elements, &materials);
+        let mut unknowns = vec![solids.unknowns()];
+        unknowns.extend(contributions.iter().map(|c| c.unknowns()));
+        let dofs = DofMap::new(comm, &mesh.owned_nodes_per_rank, &mesh.ghosts, &unknowns);
         // Constraints: later entries win where two constrain the same dof.
-        let mut which = vec![usize::MAX; 3 * local.n_local_nodes()];
-        for (ci, c) in local.constraints.iter().enumerate() {
-            let nodes = local
-                .node_sets
-                .get(&c.set)
-                .map(|v| v.as_slice())
-                .unwrap_or(&[]);
-            for &n in nodes {
+        let mut which = vec![usize::MAX; 3 * mesh.n_local_nodes()];
+        for (ci, c) in constraints.iter().enumerate() {
+            for &n in mesh.set(&c.set) {
                 for k in 0..3 {
                     if c.comps[k] {
                         which[3 * n + k] = ci;
@@ -112,139 +104,192 @@ impl Model {
                 }
             }
         }
-        let constrained_local: Vec<(usize, usize)> = which
+        let n_owned_dofs = 3 * mesh.n_owned();
+        let constrained: Vec<(usize, usize)> = which
             .iter()
             .enumerate()
             .filter(|(_, &c)| c != usize::MAX)
             .map(|(d, &c)| (d, c))
             .collect();
-        let n_owned_dofs = 3 * local.n_owned();
-        let constrained_owned = constrained_local
-            .iter()
-            .copied()
+        let n_constrained_local = constrained.len();
+        let constrained_owned = constrained
+            .into_iter()
             .filter(|&(d, _)| d < n_owned_dofs)
             .collect();
-        let reaction_nodes = local
-            .reaction_sets
+        let reaction_nodes = reaction_sets
             .iter()
             .map(|s| {
-                local
-                    .node_sets
-                    .get(s)
-                    .map(|v| v.iter().copied().filter(|&n| n < local.n_owned()).collect())
-                    .unwrap_or_default()
+                mesh.set(s)
+                    .iter()
+                    .copied()
+                    .filter(|&n| n < mesh.n_owned())
+                    .collect()
             })
             .collect();
-        let n_local_dofs = 3 * local.n_local_nodes();
         let mut model = Self {
-            materials,
-            blocks,
+            work: vec![0.0; dofs.n_local_dofs()],
+            mesh,
             dofs,
-            halo,
-            node_block,
-            constrained_local,
+            solids,
+            contributions,
+            constraints,
             constrained_owned,
-            state_old: vec![0.0; s],
-            state_new: vec![0.0; s],
-            state_offset,
+            n_constrained_local,
+            reaction_sets,
             reaction_nodes,
-            work: vec![0.0; n_local_dofs],
-            element_evaluations: 0,
-            local,
-            contact,
+            displacement_sets,
+            initial_velocity,
+            columns: Vec::new(),
+            column_map: Vec::new(),
         };
-        if comm.all_ok(model.contact.is_empty()) {
-            return Ok(model);
+        for (i, c) in model.contributions.iter_mut().enumerate() {
+            c.bind(&model.dofs, i + 1);
         }
-        model.set_contact_scales(comm);
+        model.merge_columns();
+        let wants = model.contributions.iter().any(|c| c.wants_reference());
+        if !comm.all_ok(!wants) {
+            model.set_reference(comm);
+        }
         Ok(model)
     }
 
-    /// κ of every tracked node without a deck value: the mean diagonal entry of its
-    /// block of the stiffness at the reference state, scaled from the P-wave modulus
-    /// λ + 2μ that dominates it down to Young's modulus E, by (1 + ν)(1 − 2ν)/(1 − ν)
-    /// (smallest over the node's materials). κ is the augmentation parameter of the
-    /// friction law (γ compares λ_T with the slip g_T); Alart–Curnier-type semi-smooth
-    /// Newton wants it of the order of E·h, and a bulk-dominated κ (rubber: K/G ~ 1000)
-    /// made the stick/slip decisions cycle (collective: one assembly).
-    fn set_contact_scales(&mut self, comm: &dyn Comm) {
-        let mut factor = vec![1.0f64; self.local.n_local_nodes()];
-        for e in 0..self.local.n_elems() {
-            let nu = self.local.materials[self.local.elem_material[e] as usize]
-                .1
-                .nu();
+    /// The contributions' history columns in output order: each contribution's own
+    /// columns in list order, then the shared ones (merged by name).
+    fn merge_columns(&mut self) {
+        let mut own = Vec::new();
+        let mut shared: Vec<Column> = Vec::new();
+        let mut map = Vec::new();
+        for c in std::iter::once(&self.solids as &dyn Contribution)
+            .chain(self.contributions.iter().map(|c| c.as_ref()))
+        {
+            let mut m = Vec::new();
+            for col in c.columns() {
+                if col.shared {
+                    let i = match shared.iter().position(|s| s.name == col.name) {
+                        Some(i) => i,
+                        None => {
+                            shared.push(col);
+                            shared.len() - 1
+                        }
+                    };
+                    m.push(usize::MAX - i);
+                } else {
+                    m.push(own.len());
+                    own.push(col);
+                }
+            }
+            map.push(m);
+        }
+        let n_own = own.len();
+        for m in &mut map {
+            for i in m.iter_mut() {
+                if *i > usize::MAX / 2 {
+                    *i = n_own + (usize::MAX - *i);
+                }
+            }
+        }
+        own.extend(shared);
+        self.columns = own;
+        self.column_map = map;
+    }
+
+    /// Every contribution, the solid elements first.
+    fn each(&mut self) -> impl Iterator<Item = &mut (dyn Contribution + 'static)> + '_ {
+        std::iter::once(&mut self.solids as &mut dyn Contribution)
+            .chain(self.contributions.iter_mut().map(|c| c.as_mut()))
+    }
+
+    fn each_ref(&self) -> impl Iterator<Item = &(dyn Contribution + 'static)> + '_ {
+        std::iter::once(&self.solids as &dyn Contribution)
+            .chain(self.contributions.iter().map(|c| c.as_ref()))
+    }
+
+    /// Collective: the reference stiffness (the solid elements' tangent at u = 0, one
+    /// assembly) and what it says about each node, for the contributions that scale
+    /// with the mesh.
+    fn set_reference(&mut self, comm: &dyn Comm) {
+        let n_local = self.mesh.n_local_nodes();
+        let mut factor = vec![1.0f64; n_local];
+        for e in 0..self.solids.len() {
+            let nu = self.solids.material_defs[self.solids.elements.material[e] as usize].nu();
             let f = (1.0 + nu) * (1.0 - 2.0 * nu) / (1.0 - nu);
-            for &n in self.local.elem_nodes(e) {
+            for &n in self.solids.elements.nodes(e) {
                 factor[n] = factor[n].min(f);
             }
         }
         let mut k = self.new_matrix(comm);
         k.zero();
-        let u0 = vec![0.0; 3 * self.local.n_local_nodes()];
-        let old = self.state_new.clone();
-        self.element_pass(&u0, None, Some(&mut k));
-        self.state_new = old;
+        let u0 = vec![0.0; self.dofs.n_local_dofs()];
+        let old = self.solids.state_new.clone();
+        let _ = self.solids.evaluate(&mut Evaluation {
+            t: 0.0,
+            coords: &self.mesh.coords,
+            dofs: &self.dofs,
+            u: &u0,
+            forces: None,
+            jacobian: Some(&mut k),
+        });
+        self.solids.state_new = old;
         k.finish_assembly(comm);
-        let start = self.blocks.start();
-        let nb = &self.node_block;
-        self.contact.set_kappa(|n| {
-            let d = k
-                .block(nb[n] - start, nb[n])
+        let start = self.dofs.blocks.start();
+        let mut k_diag = vec![0.0; n_local];
+        let mut sum = [0.0, 0.0];
+        for (n, d) in k_diag.iter_mut().enumerate().take(self.mesh.n_owned()) {
+            let b = self.dofs.global_block(n);
+            *d = k
+                .block(b - start, b)
                 .map(|b| (b[0] + b[4] + b[8]) / 3.0)
                 .unwrap_or(0.0);
-            (d, factor[n])
-        });
+            sum[0] += *d;
+            sum[1] += 1.0;
+        }
+        comm.allreduce_sum(&mut sum);
+        let r = Reference {
+            k_diag: &k_diag,
+            e_factor: &factor,
+            k_mean: sum[0] / sum[1].max(1.0),
+        };
+        for c in self.contributions.iter_mut() {
+            c.setup(&r);
+        }
     }
 
-    /// All unknowns owned here: node dofs, then multipliers.
+    /// All unknowns owned here: node dofs, then the contributions' extras.
     pub fn n_owned_dofs(&self) -> usize {
-        3 * self.blocks.owned_len()
+        self.dofs.n_owned_dofs()
     }
 
     /// The owned node dofs (the first `3 · n_owned` unknowns of the owned range).
     pub fn n_node_dofs(&self) -> usize {
-        3 * self.local.n_owned()
+        self.dofs.n_node_dofs()
     }
 
-    /// Local indices of the owned multiplier unknowns.
-    pub fn multiplier_range(&self) -> std::ops::Range<usize> {
-        self.n_node_dofs()..self.n_owned_dofs()
+    /// The owned unknowns that are not node displacements (multipliers, reference point
+    /// DOFs): algebraic, without mass.
+    pub fn extra_range(&self) -> std::ops::Range<usize> {
+        self.dofs.extra_range()
     }
 
-    /// Owned node dofs plus ghost copies, refreshed from their owners (multipliers are
-    /// left out: `u_local` is indexed by local node).
+    /// Collective: the local vector (owned and ghost blocks) of an owned one.
     pub fn gather(&self, comm: &dyn Comm, u_owned: &[f64], u_local: &mut Vec<f64>) {
-        let n = self.n_node_dofs();
-        u_local.resize(n + self.halo.n_ghosts(), 0.0);
-        u_local[..n].copy_from_slice(&u_owned[..n]);
-        let (_, ghosts) = u_local.split_at_mut(n);
-        self.halo.forward(comm, u_owned, ghosts);
+        self.dofs.gather(comm, u_owned, u_local);
     }
 
-    /// The prescribed values at time t of the owned constrained dofs: (local dof, value).
+    /// The prescribed values at time t of the owned constrained dofs: (owned index,
+    /// value): supports on node sets, then the contributions' own.
     pub fn prescribed(&self, t: f64) -> Vec<(usize, f64)> {
-        self.constrained_owned
+        let mut out: Vec<(usize, f64)> = self
+            .constrained_owned
             .iter()
             .map(|&(d, c)| {
-                let con = &self.local.constraints[c];
-                (d, con.value(self.local.coords[d / 3], d % 3, t))
+                let con = &self.constraints[c];
+                (d, con.value(self.mesh.coords[d / 3], d % 3, t))
             })
-            .collect()
-    }
-
-    fn elem_coords(
-        &self,
-        e: usize,
-        u_local: &[f64],
-        x0: &mut [[f64; 3]; 8],
-        u: &mut [[f64; 3]; 8],
-    ) -> usize {
-        let nodes = self.local.elem_nodes(e);
-        for (a, &n) in nodes.iter().enumerate() {
-            x0[a] = self.local.coords[n];
-            u[a] = [u_local[3 * n], u_local[3 * n + 1], u_local[3 * n + 2]];
+            .collect();
+        for c in self.each_ref() {
+            c.prescribed(t, &self.dofs, &mut out);
         }
-        nodes.len()
+        out
     }
 
     /// Residual r = f_int(u) − f_ext(u, t) on owned dofs, constrained rows included
@@ -266,8 +311,8 @@ impl Model {
         Ok(info)
     }
 
-    /// Internal and external forces on owned dofs (ghost contributions summed), as
-    /// [`Model::residual`] combines them. Collective.
+    /// Internal and external forces on owned dofs: every contribution evaluated on local
+    /// data, then ghost entries summed on their owners. Collective.
     pub fn forces(
         &mut self,
         comm: &dyn Comm,
@@ -277,34 +322,13 @@ impl Model {
         f_ext_owned: &mut [f64],
     ) -> Result<ResidualInfo> {
         let mut u_local = std::mem::take(&mut self.work);
-        self.gather(comm, u_owned, &mut u_local);
+        self.dofs.gather(comm, u_owned, &mut u_local);
         let nl = u_local.len();
         let mut f_int = vec![0.0; nl];
         let mut f_ext = vec![0.0; nl];
-        let failure = self.element_pass(&u_local, Some(&mut f_int), None);
-        self.external_forces(&u_local, t, &mut f_ext, None);
-        // Sum ghost contributions on the owners.
-        let no = self.n_node_dofs();
-        let (own_i, ghost_i) = f_int.split_at_mut(no);
-        self.halo.reverse_add(comm, ghost_i, own_i);
-        let (own_e, ghost_e) = f_ext.split_at_mut(no);
-        self.halo.reverse_add(comm, ghost_e, own_e);
-        f_int_owned.iter_mut().for_each(|x| *x = 0.0);
-        f_ext_owned.iter_mut().for_each(|x| *x = 0.0);
-        f_int_owned[..no].copy_from_slice(own_i);
-        f_ext_owned[..no].copy_from_slice(own_e);
-        // Rigid walls: forces on owned tracked nodes count as external; multiplier rows
-        // (−κ h, zero at a solution) go with the internal forces.
-        self.contact.residual(
-            &self.local.coords,
-            &u_local,
-            u_owned,
-            t,
-            f_ext_owned,
-            f_int_owned,
-            None,
-            &self.node_block,
-        );
+        let failure = self.evaluate_all(&u_local, t, Some((&mut f_int, &mut f_ext)), None);
+        self.dofs.sum_to_owned(comm, &f_int, f_int_owned);
+        self.dofs.sum_to_owned(comm, &f_ext, f_ext_owned);
         let mut sums = [0.0, 0.0, if failure.is_some() { 1.0 } else { 0.0 }];
         for i in 0..f_int_owned.len() {
             sums[0] += f_int_owned[i] * f_int_owned[i];
@@ -323,191 +347,44 @@ impl Model {
         })
     }
 
-    /// One loop over the local elements at `u_local`: internal forces into `f_int`
-    /// and/or element tangents into `k`. Returns the first element failure (an
-    /// inverted element), which the caller agrees on across ranks.
-    fn element_pass(
+    /// Evaluate every contribution at the local state; the first failure's message.
+    fn evaluate_all(
         &mut self,
         u_local: &[f64],
-        mut f_int: Option<&mut [f64]>,
-        mut k: Option<&mut DistMatrix>,
+        t: f64,
+        mut forces: Option<(&mut [f64], &mut [f64])>,
+        mut jacobian: Option<&mut DistMatrix>,
     ) -> Option<String> {
-        let mut failure: Option<String> = None;
-        let mut x0 = [[0.0; 3]; 8];
-        let mut ue = [[0.0; 3]; 8];
-        let mut fe = [0.0; 24];
-        let mut ke = vec![0.0; if k.is_some() { 576 } else { 0 }];
-        let mut blocks = [0usize; 8];
-        for e in 0..self.local.n_elems() {
-            let n = self.elem_coords(e, u_local, &mut x0, &mut ue);
-            let mat = self.materials[self.local.elem_material[e] as usize].as_ref();
-            let (s0, s1) = (self.state_offset[e], self.state_offset[e + 1]);
-            let res = element_force(
-                self.local.kinds[e],
-                self.local.elem_formulation[e],
-                &x0[..n],
-                &ue[..n],
-                mat,
-                &self.state_old[s0..s1],
-                &mut self.state_new[s0..s1],
-                &mut fe[..3 * n],
-                k.as_ref().map(|_| &mut ke[..9 * n * n]),
-            );
-            if let Err(err) = res {
-                failure.get_or_insert_with(|| {
-                    format!("element {}: {}", self.local.orig_elem[e], err.0)
-                });
-                continue;
-            }
-            let nodes = self.local.elem_nodes(e);
-            if let Some(f) = f_int.as_deref_mut() {
-                for (a, &node) in nodes.iter().enumerate() {
-                    for c in 0..3 {
-                        f[3 * node + c] += fe[3 * a + c];
-                    }
-                }
-            }
-            if let Some(kmat) = k.as_deref_mut() {
-                for (a, &node) in nodes.iter().enumerate() {
-                    blocks[a] = self.node_block[node];
-                }
-                kmat.add_element(&blocks[..n], &ke[..9 * n * n]);
+        let (coords, dofs) = (&self.mesh.coords, &self.dofs);
+        let mut failure = None;
+        let parts = std::iter::once(&mut self.solids as &mut dyn Contribution)
+            .chain(self.contributions.iter_mut().map(|c| c.as_mut()));
+        for c in parts {
+            let mut ev = Evaluation {
+                t,
+                coords,
+                dofs,
+                u: u_local,
+                forces: forces.as_mut().map(|(a, b)| (&mut **a, &mut **b)),
+                jacobian: jacobian.as_deref_mut(),
+            };
+            if let Err(e) = c.evaluate(&mut ev) {
+                failure.get_or_insert(e);
             }
         }
-        self.element_evaluations += self.local.n_elems() as u64;
         failure
     }
 
-    /// External forces at time t into `f` (local dofs); if `k` is given, the load
-    /// stiffness −∂f_ext/∂u of follower loads is added to it.
-    fn external_forces(
-        &self,
-        u_local: &[f64],
-        t: f64,
-        f: &mut [f64],
-        mut k: Option<&mut DistMatrix>,
-    ) {
-        let no = self.local.n_owned();
-        let mut fe = [0.0; 12];
-        let mut ke = [0.0; 144];
-        for load in &self.local.loads {
-            match load {
-                Load::Nodal { set, force, curve } => {
-                    let s = curve.eval(t);
-                    for &n in self
-                        .local
-                        .node_sets
-                        .get(set)
-                        .map(|v| v.as_slice())
-                        .unwrap_or(&[])
-                    {
-                        if n < no {
-                            for c in 0..3 {
-                                f[3 * n + c] += force[c] * s;
-                            }
-                        }
-                    }
-                }
-                Load::Traction {
-                    surface,
-                    traction,
-                    curve,
-                } => {
-                    let s = curve.eval(t);
-                    let tr = [traction[0] * s, traction[1] * s, traction[2] * s];
-                    for &(e, face) in self
-                        .local
-                        .surfaces
-                        .get(surface)
-                        .map(|v| v.as_slice())
-                        .unwrap_or(&[])
-                    {
-                        let nodes = self.face_nodes(e, face);
-                        let x0: Vec<[f64; 3]> =
-                            nodes.iter().map(|&n| self.local.coords[n]).collect();
-                        let m = nodes.len();
-                        traction_face(&x0, tr, &mut fe[..3 * m]);
-                        for (a, &n) in nodes.iter().enumerate() {
-                            for c in 0..3 {
-                                f[3 * n + c] += fe[3 * a + c];
-                            }
-                        }
-                    }
-                }
-                Load::Pressure {
-                    surface,
-                    pressure,
-                    curve,
-                } => {
-                    let p = pressure * curve.eval(t);
-                    for &(e, face) in self
-                        .local
-                        .surfaces
-                        .get(surface)
-                        .map(|v| v.as_slice())
-                        .unwrap_or(&[])
-                    {
-                        let nodes = self.face_nodes(e, face);
-                        let m = nodes.len();
-                        let x0: Vec<[f64; 3]> =
-                            nodes.iter().map(|&n| self.local.coords[n]).collect();
-                        let u: Vec<[f64; 3]> = nodes
-                            .iter()
-                            .map(|&n| [u_local[3 * n], u_local[3 * n + 1], u_local[3 * n + 2]])
-                            .collect();
-                        let want_k = k.is_some();
-                        pressure_face(
-                            &x0,
-                            &u,
-                            p,
-                            &mut fe[..3 * m],
-                            if want_k {
-                                Some(&mut ke[..9 * m * m])
-                            } else {
-                                None
-                            },
-                        );
-                        for (a, &n) in nodes.iter().enumerate() {
-                            for c in 0..3 {
-                                f[3 * n + c] += fe[3 * a + c];
-                            }
-                        }
-                        if let Some(kmat) = k.as_deref_mut() {
-                            // Jacobian of r = f_int − f_ext gets −∂f_ext/∂u.
-                            let neg: Vec<f64> = ke[..9 * m * m].iter().map(|v| -v).collect();
-                            let blocks: Vec<usize> =
-                                nodes.iter().map(|&n| self.node_block[n]).collect();
-                            kmat.add_element(&blocks, &neg);
-                        }
-                    }
-                }
-            }
-        }
-    }
-
-    fn face_nodes(&self, e: usize, face: u8) -> Vec<usize> {
-        let en = self.local.elem_nodes(e);
-        self.local.kinds[e].faces()[face as usize]
-            .iter()
-            .map(|&i| en[i])
-            .collect()
-    }
-
-    /// The sparsity pattern of the Jacobian (collective).
+    /// The sparsity pattern of the Jacobian: the couplings every contribution
+    /// declares (collective).
     pub fn new_matrix(&self, comm: &dyn Comm) -> DistMatrix {
         let mut pairs = Vec::new();
-        for e in 0..self.local.n_elems() {
-            let nodes = self.local.elem_nodes(e);
-            for &a in nodes {
-                for &b in nodes {
-                    pairs.push((self.node_block[a], self.node_block[b]));
-                }
-            }
+        for c in self.each_ref() {
+            c.pattern(&self.dofs, &mut pairs);
         }
-        pairs.extend(self.contact.pattern(&self.node_block));
         pairs.sort_unstable();
         pairs.dedup();
-        DistMatrix::new(comm, self.blocks.clone(), &pairs)
+        DistMatrix::new(comm, self.dofs.blocks.clone(), &pairs)
     }
 
     /// Assemble the (unconstrained) Jacobian ∂r/∂u at u (collective).
@@ -519,23 +396,9 @@ impl Model {
         k: &mut DistMatrix,
     ) -> Result<()> {
         let mut u_local = std::mem::take(&mut self.work);
-        self.gather(comm, u_owned, &mut u_local);
+        self.dofs.gather(comm, u_owned, &mut u_local);
         k.zero();
-        let failure = self.element_pass(&u_local, None, Some(k));
-        let mut scratch = vec![0.0; u_local.len()];
-        self.external_forces(&u_local, t, &mut scratch, Some(k));
-        let mut scratch_f = vec![0.0; u_owned.len()];
-        let mut scratch_r = vec![0.0; u_owned.len()];
-        self.contact.residual(
-            &self.local.coords,
-            &u_local,
-            u_owned,
-            t,
-            &mut scratch_f,
-            &mut scratch_r,
-            Some(k),
-            &self.node_block,
-        );
+        let failure = self.evaluate_all(&u_local, t, None, Some(k));
         k.finish_assembly(comm);
         self.work = u_local;
         if !comm.all_ok(failure.is_none()) {
@@ -547,30 +410,200 @@ impl Model {
         Ok(())
     }
 
-    /// Accept the history computed at the last converged evaluation.
+    /// Accept the state of the last converged evaluation.
     pub fn commit(&mut self) {
-        self.state_old.copy_from_slice(&self.state_new);
-        self.contact.commit();
-    }
-
-    /// Explicit runs: put tracked nodes of ALM walls that penetrate back on the wall and
-    /// remove their approach velocity (`v` is the mid-step velocity).
-    pub fn contact_kinematic(&mut self, u: &mut [f64], v: &mut [f64], m: &[f64], t: f64, h: f64) {
-        self.contact.kinematic(&self.local.coords, u, v, m, t, h);
-    }
-
-    /// Implicit dynamics after a converged step: tracked nodes pressed against a wall get
-    /// the wall's normal velocity and acceleration (owned dofs; no communication).
-    pub fn contact_persistency(&self, v: &mut [f64], a: &mut [f64], t: f64, h: f64) {
-        self.contact.persistency(v, a, t, h);
-    }
-
-    /// Wall forces, penetration and contact counts at the last evaluation (collective).
-    pub fn contact_report(&self, comm: &dyn Comm) -> Option<contact::ContactReport> {
-        if self.local.walls.is_empty() {
-            return None;
+        for c in self.each() {
+            c.commit();
         }
-        Some(self.contact.report(comm, self.local.walls.len()))
+    }
+
+    /// An explicit run starts: every contribution must be able to take part.
+    pub fn start_explicit(&mut self) -> Result<()> {
+        for c in self.each() {
+            let name = c.name().to_string();
+            c.start_explicit()
+                .map_err(|why| Error::input(format!("{name}: {why}")))?;
+        }
+        Ok(())
+    }
+
+    /// Explicit runs: kinematic corrections after a step's displacement update (owned
+    /// vectors; `v` the mid-step velocity, `m` the lumped mass).
+    pub fn kinematic(&mut self, u: &mut [f64], v: &mut [f64], m: &[f64], t: f64, h: f64) {
+        let coords = &self.mesh.coords;
+        for c in self.contributions.iter_mut() {
+            c.kinematic(coords, u, v, m, t, h);
+        }
+    }
+
+    /// Implicit dynamics after a converged step: velocity and acceleration corrections
+    /// (contact persistency; owned dofs, no communication).
+    pub fn persistency(&self, v: &mut [f64], a: &mut [f64], t: f64, h: f64) {
+        for c in self.each_ref() {
+            c.persistency(v, a, t, h);
+        }
+    }
+
+    /// The contributions' history columns (the same on every rank).
+    pub fn columns(&self) -> &[Column] {
+        &self.columns
+    }
+
+    /// Collective: the history values of the contributions' columns at the last
+    /// evaluation (u the converged owned unknowns at time t). Two reductions at most.
+    pub fn column_values(&self, comm: &dyn Comm, u_owned: &[f64], t: f64) -> Vec<f64> {
+        if self.columns.is_empty() {
+            return Vec::new();
+        }
+        let mut u_local = Vec::new();
+        self.dofs.gather(comm, u_owned, &mut u_local);
+        let s = State {
+            t,
+            coords: &self.mesh.coords,
+            dofs: &self.dofs,
+            u: &u_local,
+        };
+        let mut values = vec![0.0; self.columns.len()];
+        let mut seen = vec![false; self.columns.len()];
+        for (c, map) in self.each_ref().zip(&self.column_map) {
+            if map.is_empty() {
+                continue;
+            }
+            let mut mine = vec![0.0; map.len()];
+            c.column_values(&s, &mut mine);
+            for (&i, v) in map.iter().zip(mine) {
+                values[i] = match (seen[i], self.columns[i].reduce) {
+                    (false, _) => v,
+                    (true, Reduce::Max) => values[i].max(v),
+                    (true, _) => values[i] + v,
+                };
+                seen[i] = true;
+            }
+        }
+        let (sum, max): (Vec<usize>, Vec<usize>) = {
+            let by = |r: Reduce| -> Vec<usize> {
+                (0..values.len())
+                    .filter(|&i| self.columns[i].reduce == r)
+                    .collect()
+            };
+            (by(Reduce::Sum), by(Reduce::Max))
+        };
+        for (idx, reduce) in [(sum, Reduce::Sum), (max, Reduce::Max)] {
+            if idx.is_empty() {
+                continue;
+            }
+            let mut buf: Vec<f64> = idx.iter().map(|&i| values[i]).collect();
+            match reduce {
+                Reduce::Max => comm.allreduce_max(&mut buf),
+                _ => comm.allreduce_sum(&mut buf),
+            }
+            for (&i, v) in idx.iter().zip(buf) {
+                values[i] = v;
+            }
+        }
+        values
+    }
+
+    /// The summary entries of the contributions from the reduced column values of the
+    /// last step: `{group: {name: value}}`.
+    pub fn summary(&self, values: &[f64]) -> BTreeMap<String, serde_json::Value> {
+        let mut out: BTreeMap<String, serde_json::Map<String, serde_json::Value>> = BTreeMap::new();
+        for (c, map) in self.each_ref().zip(&self.column_map) {
+            let mine: Vec<f64> = map
+                .iter()
+                .map(|&i| values.get(i).copied().unwrap_or(f64::NAN))
+                .collect();
+            if let Some((group, name, v)) = c.summary(&mine) {
+                out.entry(group.to_string()).or_default().insert(name, v);
+            }
+        }
+        out.into_iter()
+            .map(|(k, v)| (k, serde_json::Value::Object(v)))
+            .collect()
+    }
+
+    /// Collective: the contributions' output fields at the converged owned unknowns
+    /// (rows of this rank), merged by name: a field several contributions publish
+    /// combines entry by entry.
+    pub fn fields(&self, comm: &dyn Comm, u_owned: &[f64], t: f64) -> Vec<Field> {
+        let mut u_local = Vec::new();
+        self.dofs.gather(comm, u_owned, &mut u_local);
+        let s = State {
+            t,
+            coords: &self.mesh.coords,
+            dofs: &self.dofs,
+            u: &u_local,
+        };
+        let rows = |spec: &FieldSpec| match spec.center {
+            contribution::Center::Node => self.mesh.n_owned(),
+            contribution::Center::Cell => self.solids.len(),
+        };
+        let mut out: Vec<Field> = Vec::new();
+        for c in self.each_ref() {
+            let specs = c.fields();
+            if specs.is_empty() {
+                continue;
+            }
+            let mut mine: Vec<Vec<f64>> = specs
+                .iter()
+                .map(|f| vec![f64::NAN; rows(f) * f.width])
+                .collect();
+            c.field_values(&s, &mut mine);
+            for (spec, vals) in specs.into_iter().zip(mine) {
+                match out.iter_mut().find(|f| f.spec.name == spec.name) {
+                    None => out.push(Field { spec, values: vals }),
+                    Some(f) => {
+                        for (o, v) in f.values.iter_mut().zip(vals) {
+                            if o.is_nan() {
+                                *o = v;
+                            } else if !v.is_nan() {
+                                *o = match f.spec.combine {
+                                    contribution::Combine::Sum => *o + v,
+                                    contribution::Combine::Min => o.min(v),
+                                    contribution::Combine::First => *o,
+                                };
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        for f in &mut out {
+            let empty = f.spec.empty;
+            f.values
+                .iter_mut()
+                .filter(|v| v.is_nan())
+                .for_each(|v| *v = empty);
+        }
+        out
+    }
+
+    /// One field by name (this rank's rows), as [`Model::fields`] writes it.
+    pub fn field(&self, comm: &dyn Comm, u_owned: &[f64], t: f64, name: &str) -> Option<Vec<f64>> {
+        self.fields(comm, u_owned, t)
+            .into_iter()
+            .find(|f| f.spec.name == name)
+            .map(|f| f.values)
+    }
+
+    /// The contributions' moving geometry.
+    pub fn grids(&self) -> Vec<GridSpec> {
+        self.each_ref().flat_map(|c| c.grids()).collect()
+    }
+
+    /// The points of every grid at time t, from the reduced column values of that step.
+    pub fn grid_points(&self, t: f64, values: &[f64]) -> Vec<Vec<[f64; 3]>> {
+        let mut out = Vec::new();
+        for (c, map) in self.each_ref().zip(&self.column_map) {
+            let mine: Vec<f64> = map
+                .iter()
+                .map(|&i| values.get(i).copied().unwrap_or(f64::NAN))
+                .collect();
+            for i in 0..c.grids().len() {
+                out.push(c.grid_points(i, t, &mine));
+            }
+        }
+        out
     }
 
     /// Reaction force on each reaction set: Σ over its owned nodes of r = f_int − f_ext
@@ -588,83 +621,28 @@ impl Model {
         sums.chunks(3).map(|c| [c[0], c[1], c[2]]).collect()
     }
 
-    /// Whether any material carries an equivalent plastic strain (same on all ranks:
-    /// every rank holds the whole material list).
-    pub fn has_plastic_strain(&self) -> bool {
-        self.materials.iter().any(|m| {
-            m.equivalent_plastic_strain(&vec![0.0; m.n_state()])
-                .is_some()
-        })
-    }
-
-    /// Equivalent plastic strain of every local element at the last committed state:
-    /// the mean over its integration points (0 for elastic materials).
-    pub fn plastic_strains(&self) -> Vec<f64> {
-        (0..self.local.n_elems())
-            .map(|e| {
-                let mat = self.materials[self.local.elem_material[e] as usize].as_ref();
-                let ns = mat.n_state();
-                let (s0, s1) = (self.state_offset[e], self.state_offset[e + 1]);
-                if ns == 0 || s1 == s0 {
-                    return 0.0;
-                }
-                let pts = self.state_old[s0..s1].chunks(ns);
-                let n = pts.len() as f64;
-                pts.map(|s| mat.equivalent_plastic_strain(s).unwrap_or(0.0))
-                    .sum::<f64>()
-                    / n
-            })
-            .collect()
-    }
-
-    /// Volume-averaged Cauchy stress of every local element.
-    pub fn stresses(&self, comm: &dyn Comm, u_owned: &[f64]) -> Result<Vec<[f64; 6]>> {
-        let mut u_local = Vec::new();
-        self.gather(comm, u_owned, &mut u_local);
-        let mut x0 = [[0.0; 3]; 8];
-        let mut ue = [[0.0; 3]; 8];
-        let mut out = Vec::with_capacity(self.local.n_elems());
-        for e in 0..self.local.n_elems() {
-            let n = self.elem_coords(e, &u_local, &mut x0, &mut ue);
-            let mat = self.materials[self.local.elem_material[e] as usize].as_ref();
-            let (s0, s1) = (self.state_offset[e], self.state_offset[e + 1]);
-            let s = element_stress(
-                self.local.kinds[e],
-                self.local.elem_formulation[e],
-                &x0[..n],
-                &ue[..n],
-                mat,
-                &self.state_old[s0..s1],
-            )
-            .unwrap_or([f64::NAN; 6]);
-            out.push(s);
-        }
-        Ok(out)
-    }
-
     /// Mean characteristic element length over the whole model (collective).
     pub fn char_length(&self, comm: &dyn Comm) -> f64 {
-        let mut s = [0.0, self.local.n_elems() as f64];
-        for e in 0..self.local.n_elems() {
-            let x0: Vec<[f64; 3]> = self
-                .local
-                .elem_nodes(e)
-                .iter()
-                .map(|&n| self.local.coords[n])
-                .collect();
-            s[0] += crate::fem::element::char_length(self.local.kinds[e], &x0);
-        }
+        let mut s = [
+            self.solids.char_length_sum(&self.mesh.coords),
+            self.solids.len() as f64,
+        ];
         comm.allreduce_sum(&mut s);
         s[0] / s[1].max(1.0)
     }
 
-    /// Owned constrained dofs, local scalar indices (for `DistMatrix::constrain`).
+    /// Owned constrained node dofs (for `DistMatrix::constrain`).
     pub fn constrained_dofs(&self) -> Vec<usize> {
         self.constrained_owned.iter().map(|&(d, _)| d).collect()
     }
 
-    /// How many local (owned + ghost) dofs are constrained.
+    /// Owned constrained node dofs with the index of the support that sets them.
+    pub fn constrained_owned(&self) -> &[(usize, usize)] {
+        &self.constrained_owned
+    }
+
+    /// How many local (owned + ghost) node dofs are constrained.
     pub fn n_constrained_local(&self) -> usize {
-        self.constrained_local.len()
+        self.n_constrained_local
     }
 }

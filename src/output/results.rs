@@ -6,10 +6,10 @@
 
 use super::h5::H5File;
 use super::xdmf::{
-    write_xdmf_with_walls, AttrKind, Center, XdmfAttr, XdmfMesh, XdmfStep, XdmfTopology, XdmfWall,
+    write_xdmf_with_grids, AttrKind, Center, XdmfAttr, XdmfGrid, XdmfMesh, XdmfStep, XdmfTopology,
 };
-use crate::fem::element::von_mises;
 use crate::mesh::ElemKind;
+use crate::model::contribution::Center as FieldCenter;
 use crate::model::Model;
 use crate::parallel::Comm;
 use crate::solve::stepping::StepRecord;
@@ -17,11 +17,10 @@ use crate::{Error, Result};
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
-/// A rigid wall's surface for output: local-frame vertices (placed at each step by the
-/// wall's motion) and its HDF5 group name.
-struct WallSurface {
+/// A contribution's moving geometry in the file: its HDF5 group and point count.
+struct GridOut {
     group: String,
-    local_points: Vec<[f64; 3]>,
+    n_points: usize,
 }
 
 pub struct ResultsWriter {
@@ -29,10 +28,12 @@ pub struct ResultsWriter {
     xmf_path: PathBuf,
     xmesh: XdmfMesh,
     steps: Vec<XdmfStep>,
-    /// Rigid walls (model order): their surfaces and XDMF grids (empty without walls).
-    walls: Vec<WallSurface>,
-    xwalls: Vec<XdmfWall>,
+    /// The contributions' moving geometry (model order) and its XDMF grids.
+    grids: Vec<GridOut>,
+    xgrids: Vec<XdmfGrid>,
     history: Option<std::fs::File>,
+    /// Which of the contributions' history columns are integer counts.
+    counts: Vec<bool>,
     n_nodes: u64,
     n_elems: u64,
     node_start: u64,
@@ -53,26 +54,32 @@ fn agree(comm: &dyn Comm, r: Result<()>) -> Result<()> {
     }
 }
 
-/// HDF5 group names of the walls: the deck names with `/` (a path separator in HDF5)
-/// replaced, made unique by the wall's index where that makes two equal.
-fn wall_groups(names: &[String]) -> Vec<String> {
+/// HDF5 group paths of the grids: each `/`-separated component of the names the
+/// contributions give kept (a deck name's own `/` replaced), made unique by the grid's
+/// index where that makes two equal.
+fn grid_groups(names: &[String]) -> Vec<String> {
     let mut out: Vec<String> = Vec::with_capacity(names.len());
     for (i, n) in names.iter().enumerate() {
-        let mut g = n.replace('/', "_");
-        if g.is_empty() || g == "." || g == ".." || out.contains(&g) {
+        let (dir, leaf) = match n.split_once('/') {
+            Some((d, l)) => (format!("{d}/"), l),
+            None => (String::new(), n.as_str()),
+        };
+        let mut g = leaf.replace('/', "_");
+        if g.is_empty() || g == "." || g == ".." || out.contains(&format!("{dir}{g}")) {
             g = format!("{g}_{i}");
         }
-        out.push(g);
+        out.push(format!("{dir}{g}"));
     }
     out
 }
 
 /// The header of `history.csv` (README "Outputs"); [`history_row`] writes the rows.
+/// `columns` are the contributions' columns (wall forces, contact counts, ...).
 pub(crate) fn history_header(
     reaction_sets: &[String],
     displacement_sets: &[String],
     dynamic: bool,
-    walls: &[String],
+    columns: &[String],
 ) -> String {
     let mut head =
         String::from("step,time,nonlinear_iterations,linear_iterations,retries,wall_time_s");
@@ -88,20 +95,16 @@ pub(crate) fn history_header(
     if dynamic {
         head.push_str(",kinetic_energy,internal_energy,external_work,energy_balance");
     }
-    if !walls.is_empty() {
-        for w in walls {
-            for c in ["fx", "fy", "fz", "mx", "my", "mz", "ux", "uy", "uz"] {
-                head.push_str(&format!(",{w}.{c}"));
-            }
-        }
-        head.push_str(",max_penetration,contact_active,contact_sticking");
+    for c in columns {
+        head.push(',');
+        head.push_str(c);
     }
     head
 }
 
-/// One row of `history.csv` for a model with `n_walls` walls (the columns of
-/// [`history_header`]; contact columns are `nan` should a record lack its report).
-pub(crate) fn history_row(rec: &StepRecord, n_walls: usize) -> String {
+/// One row of `history.csv` (the columns of [`history_header`]); `counts` says which of
+/// the contributions' columns are integer counts; `nan` where a record lacks them.
+pub(crate) fn history_row(rec: &StepRecord, counts: &[bool]) -> String {
     let s = &rec.stats;
     let mut row = format!(
         "{},{},{},{},{},{:.6}",
@@ -127,35 +130,30 @@ pub(crate) fn history_row(rec: &StepRecord, n_walls: usize) -> String {
             e.kinetic, e.internal, e.external, e.balance
         ));
     }
-    if n_walls > 0 {
-        let c = rec.contact.as_ref();
-        for wi in 0..n_walls {
-            match c.and_then(|c| c.walls.get(wi)) {
-                Some(w) => {
-                    for v in w.force.iter().chain(&w.moment).chain(&w.displacement) {
-                        row.push_str(&format!(",{v:.12e}"));
-                    }
-                }
-                None => row.push_str(&",nan".repeat(9)),
-            }
-        }
-        match c {
-            Some(c) => row.push_str(&format!(
-                ",{:.12e},{},{}",
-                c.max_penetration, c.active, c.sticking
-            )),
-            None => row.push_str(",nan,nan,nan"),
+    for (i, &count) in counts.iter().enumerate() {
+        match rec.columns.get(i) {
+            Some(v) if count => row.push_str(&format!(",{}", *v as u64)),
+            Some(v) => row.push_str(&format!(",{v:.12e}")),
+            None => row.push_str(",nan"),
         }
     }
     row
 }
 
 impl ResultsWriter {
-    /// Collective: create the files and write the mesh.
-    pub fn create(comm: &dyn Comm, dir: &Path, model: &Model) -> Result<Self> {
+    /// Collective: create the files (named after `scene`) and write the mesh; `units`
+    /// describes the unit system, `dynamic` adds the energy columns.
+    pub fn create(
+        comm: &dyn Comm,
+        dir: &Path,
+        model: &Model,
+        scene: &str,
+        units: &str,
+        dynamic: bool,
+    ) -> Result<Self> {
         let t0 = std::time::Instant::now();
-        let l = &model.local;
-        let scene = l.settings.scene.clone();
+        let l = &model.mesh;
+        let el = &model.solids.elements;
         let r = if comm.rank() == 0 {
             std::fs::create_dir_all(dir).map_err(|e| {
                 Error::runtime(format!(
@@ -175,8 +173,8 @@ impl ResultsWriter {
         let elem_start = l.elem_start() as u64;
         let no = l.n_owned();
         let mut bytes = 0u64;
-        h5.write_attr_str("/", "scene", &scene)?;
-        h5.write_attr_str("/", "units", l.settings.units.describe())?;
+        h5.write_attr_str("/", "scene", scene)?;
+        h5.write_attr_str("/", "units", units)?;
         h5.write_attr_str("/", "alfe_version", env!("CARGO_PKG_VERSION"))?;
         h5.create_group("/mesh")?;
         let coords: Vec<f64> = l.coords[..no].iter().flatten().copied().collect();
@@ -186,28 +184,28 @@ impl ResultsWriter {
         h5.write_rows_i64("/mesh/original_node_id", n_nodes, 1, node_start, &orig_n)?;
         // Connectivity in global (rank-contiguous) node numbers.
         let mut kinds = [0.0, 0.0];
-        for k in &l.kinds {
+        for k in &el.kinds {
             kinds[(*k == ElemKind::Tet4) as usize] = 1.0;
         }
         comm.allreduce_max(&mut kinds);
         let topology = if kinds[0] > 0.0 && kinds[1] > 0.0 {
             // XDMF mixed: [type, nodes...] per element; offsets by exclusive scan.
             let mut mixed = Vec::new();
-            for e in 0..l.n_elems() {
-                mixed.push(match l.kinds[e] {
+            for e in 0..el.len() {
+                mixed.push(match el.kinds[e] {
                     ElemKind::Hex8 => 9,
                     ElemKind::Tet4 => 6,
                 });
-                mixed.extend(l.elem_nodes(e).iter().map(|&n| l.global_node(n) as i64));
+                mixed.extend(el.nodes(e).iter().map(|&n| l.global_node(n) as i64));
             }
             let (before, total) = comm.exclusive_scan(mixed.len() as u64);
             h5.write_rows_i64("/mesh/connectivity", total, 1, before, &mixed)?;
             XdmfTopology::Mixed { n_entries: total }
         } else {
             let npe = if kinds[1] > 0.0 { 4 } else { 8 };
-            let conn: Vec<i64> = (0..l.n_elems())
+            let conn: Vec<i64> = (0..el.len())
                 .flat_map(|e| {
-                    l.elem_nodes(e)
+                    el.nodes(e)
                         .iter()
                         .map(|&n| l.global_node(n) as i64)
                         .collect::<Vec<_>>()
@@ -220,43 +218,42 @@ impl ResultsWriter {
                 XdmfTopology::Hexahedron
             }
         };
-        let part: Vec<i32> = vec![comm.rank() as i32; l.n_elems()];
+        let part: Vec<i32> = vec![comm.rank() as i32; el.len()];
         h5.write_rows_i32("/mesh/partition", n_elems, 1, elem_start, &part)?;
-        let mat: Vec<i32> = l.elem_material.iter().map(|&m| m as i32).collect();
+        let mat: Vec<i32> = el.material.iter().map(|&m| m as i32).collect();
         h5.write_rows_i32("/mesh/material", n_elems, 1, elem_start, &mat)?;
-        let orig_e: Vec<i64> = l.orig_elem.iter().map(|&e| e as i64).collect();
+        let orig_e: Vec<i64> = el.orig.iter().map(|&e| e as i64).collect();
         h5.write_rows_i64("/mesh/original_element_id", n_elems, 1, elem_start, &orig_e)?;
-        // Rigid walls: triangles once (rank 0 writes the rows, every rank takes part).
-        let names: Vec<String> = model
-            .contact
-            .walls
-            .iter()
-            .map(|w| w.def.name.clone())
-            .collect();
-        let mut walls = Vec::new();
-        let mut xwalls = Vec::new();
-        for (w, group) in model.contact.walls.iter().zip(wall_groups(&names)) {
-            let (points, tris) = w.shape.surface();
-            let path = format!("/walls/{group}/triangles");
+        // Moving geometry: cells once (rank 0 writes the rows, every rank takes part).
+        let specs = model.grids();
+        let names: Vec<String> = specs.iter().map(|g| g.name.clone()).collect();
+        let mut grids = Vec::new();
+        let mut xgrids = Vec::new();
+        for (g, group) in specs.iter().zip(grid_groups(&names)) {
+            let width = g.cells.first().map_or(3, |c| c.len()).clamp(1, 3);
+            let what = ["vertices", "segments", "triangles"][width - 1];
+            let path = format!("/{group}/{what}");
             let flat: Vec<i64> = if comm.rank() == 0 {
-                tris.iter().flatten().map(|&i| i as i64).collect()
+                g.cells.iter().flatten().map(|&i| i as i64).collect()
             } else {
                 Vec::new()
             };
-            h5.write_rows_i64(&path, tris.len() as u64, 3, 0, &flat)?;
-            h5.write_attr_str(&format!("/walls/{group}"), "name", &w.def.name)?;
-            h5.write_attr_str(&format!("/walls/{group}"), "shape", w.shape.kind())?;
+            h5.write_rows_i64(&path, g.cells.len() as u64, width as u64, 0, &flat)?;
+            for (k, v) in &g.attrs {
+                h5.write_attr_str(&format!("/{group}"), k, v)?;
+            }
             bytes += 8 * flat.len() as u64;
-            xwalls.push(XdmfWall {
-                name: w.def.name.clone(),
-                triangles_path: path,
-                n_triangles: tris.len() as u64,
-                n_points: points.len() as u64,
+            xgrids.push(XdmfGrid {
+                name: g.label.clone(),
+                cells_path: path,
+                n_cells: g.cells.len() as u64,
+                nodes_per_cell: width as u64,
+                n_points: g.n_points as u64,
                 points_paths: Vec::new(),
             });
-            walls.push(WallSurface {
+            grids.push(GridOut {
                 group,
-                local_points: points,
+                n_points: g.n_points,
             });
         }
         h5.create_group("/steps")?;
@@ -282,16 +279,17 @@ impl ResultsWriter {
             ],
         };
         let xmf_path = dir.join(format!("{scene}.xmf"));
+        let columns: Vec<String> = model.columns().iter().map(|c| c.name.clone()).collect();
         let mut history = None;
         let r = if comm.rank() == 0 {
             (|| -> Result<()> {
-                write_xdmf_with_walls(&xmf_path, &xmesh, &[], &xwalls)?;
+                write_xdmf_with_grids(&xmf_path, &xmesh, &[], &xgrids)?;
                 let mut f = std::fs::File::create(dir.join("history.csv"))?;
                 let head = history_header(
-                    &l.reaction_sets,
-                    &l.settings.output.displacements,
-                    l.settings.analysis.kind != crate::scene::deck::AnalysisKind::Static,
-                    &names,
+                    &model.reaction_sets,
+                    &model.displacement_sets,
+                    dynamic,
+                    &columns,
                 );
                 writeln!(f, "{head}")?;
                 history = Some(f);
@@ -306,9 +304,10 @@ impl ResultsWriter {
             xmf_path,
             xmesh,
             steps: Vec::new(),
-            walls,
-            xwalls,
+            grids,
+            xgrids,
             history,
+            counts: model.columns().iter().map(|c| c.count).collect(),
             n_nodes,
             n_elems,
             node_start,
@@ -323,7 +322,7 @@ impl ResultsWriter {
     }
 
     /// Collective: the history row of a converged step (always) and, if `fields`, its
-    /// displacement and stress fields.
+    /// displacement and the model's fields and geometry.
     pub fn step(
         &mut self,
         comm: &dyn Comm,
@@ -347,9 +346,8 @@ impl ResultsWriter {
         nodal: &[(&str, &[f64])],
     ) -> Result<()> {
         let t0 = std::time::Instant::now();
-        let n_walls = self.walls.len();
         let r = if let Some(f) = self.history.as_mut() {
-            let row = history_row(rec, n_walls);
+            let row = history_row(rec, &self.counts);
             writeln!(f, "{row}")
                 .and_then(|_| f.flush())
                 .map_err(Error::from)
@@ -361,92 +359,6 @@ impl ResultsWriter {
             let g = format!("/steps/{:06}", rec.step);
             self.h5.create_group(&g)?;
             self.h5.write_attr_f64(&g, "time", rec.time)?;
-            self.h5.write_rows_f64(
-                &format!("{g}/displacement"),
-                self.n_nodes,
-                3,
-                self.node_start,
-                &u[..self.n_node_dofs],
-            )?;
-            let sig = model.stresses(comm, u)?;
-            let flat: Vec<f64> = sig.iter().flatten().copied().collect();
-            self.h5.write_rows_f64(
-                &format!("{g}/stress"),
-                self.n_elems,
-                6,
-                self.elem_start,
-                &flat,
-            )?;
-            let vm: Vec<f64> = sig.iter().map(von_mises).collect();
-            self.h5.write_rows_f64(
-                &format!("{g}/von_mises"),
-                self.n_elems,
-                1,
-                self.elem_start,
-                &vm,
-            )?;
-            let plastic = model.has_plastic_strain();
-            if plastic {
-                let ep = model.plastic_strains();
-                self.h5.write_rows_f64(
-                    &format!("{g}/plastic_strain"),
-                    self.n_elems,
-                    1,
-                    self.elem_start,
-                    &ep,
-                )?;
-                self.bytes_written += 8 * ep.len() as u64;
-            }
-            for (name, v) in nodal {
-                self.h5.write_rows_f64(
-                    &format!("{g}/{name}"),
-                    self.n_nodes,
-                    3,
-                    self.node_start,
-                    &v[..self.n_node_dofs],
-                )?;
-                self.bytes_written += 8 * v.len() as u64;
-            }
-            // Contact: nodal fields (owned rows, like the displacement) and each wall's
-            // surface at this step's time (rank 0 writes the rows, every rank takes part).
-            let contact_fields: [(&str, AttrKind); 4] = [
-                ("contact_gap", AttrKind::Scalar),
-                ("contact_pressure", AttrKind::Scalar),
-                ("contact_force", AttrKind::Vector),
-                ("contact_lambda", AttrKind::Vector),
-            ];
-            if !self.walls.is_empty() {
-                let cf = model.contact.nodal_fields(model.local.n_owned());
-                let values = [&cf.gap, &cf.pressure, &cf.force, &cf.lambda];
-                for ((name, kind), v) in contact_fields.iter().zip(values) {
-                    self.h5.write_rows_f64(
-                        &format!("{g}/{name}"),
-                        self.n_nodes,
-                        kind.n_cols(),
-                        self.node_start,
-                        v,
-                    )?;
-                    self.bytes_written += 8 * v.len() as u64;
-                }
-                for (wi, w) in self.walls.iter().enumerate() {
-                    let pose = model.contact.walls[wi].def.motion.pose(rec.time);
-                    let points: Vec<f64> = if comm.rank() == 0 {
-                        w.local_points
-                            .iter()
-                            .flat_map(|&p| pose.to_global(p))
-                            .collect()
-                    } else {
-                        Vec::new()
-                    };
-                    let path = format!("{g}/walls/{}/points", w.group);
-                    self.h5
-                        .write_rows_f64(&path, w.local_points.len() as u64, 3, 0, &points)?;
-                    self.bytes_written += 8 * points.len() as u64;
-                    self.xwalls[wi].points_paths.push(path);
-                }
-            }
-            self.h5.flush()?;
-            self.bytes_written += 8 * (u.len() + flat.len() + vm.len()) as u64;
             let attr =
                 |name: &str, center: Center, kind: AttrKind, n_rows: u64, n_cols: u64| XdmfAttr {
                     name: name.into(),
@@ -458,43 +370,65 @@ impl ResultsWriter {
                     number_type: "Float",
                     precision: 8,
                 };
-            let mut attrs = vec![
-                attr(
-                    "displacement",
-                    Center::Node,
-                    AttrKind::Vector,
+            let mut attrs = Vec::new();
+            let mut node_vectors: Vec<(&str, &[f64])> = vec![("displacement", u)];
+            node_vectors.extend_from_slice(nodal);
+            for (name, v) in node_vectors {
+                let v = &v[..self.n_node_dofs];
+                self.h5.write_rows_f64(
+                    &format!("{g}/{name}"),
                     self.n_nodes,
                     3,
-                ),
-                attr("stress", Center::Cell, AttrKind::Tensor6, self.n_elems, 6),
-                attr("von_mises", Center::Cell, AttrKind::Scalar, self.n_elems, 1),
-            ];
-            for (name, _) in nodal {
+                    self.node_start,
+                    v,
+                )?;
+                self.bytes_written += 8 * v.len() as u64;
                 attrs.push(attr(name, Center::Node, AttrKind::Vector, self.n_nodes, 3));
             }
+            for f in model.fields(comm, u, rec.time) {
+                let (center, n_rows, start) = match f.spec.center {
+                    FieldCenter::Node => (Center::Node, self.n_nodes, self.node_start),
+                    FieldCenter::Cell => (Center::Cell, self.n_elems, self.elem_start),
+                };
+                let kind = match f.spec.width {
+                    1 => AttrKind::Scalar,
+                    3 => AttrKind::Vector,
+                    _ => AttrKind::Tensor6,
+                };
+                let cols = kind.n_cols();
+                self.h5.write_rows_f64(
+                    &format!("{g}/{}", f.spec.name),
+                    n_rows,
+                    cols,
+                    start,
+                    &f.values,
+                )?;
+                self.bytes_written += 8 * f.values.len() as u64;
+                attrs.push(attr(&f.spec.name, center, kind, n_rows, cols));
+            }
+            // Moving geometry at this step (rank 0 writes the rows, every rank takes part).
+            if !self.grids.is_empty() {
+                let points = model.grid_points(rec.time, &rec.columns);
+                for ((gr, xg), pts) in self.grids.iter().zip(&mut self.xgrids).zip(points) {
+                    let flat: Vec<f64> = if comm.rank() == 0 {
+                        pts.iter().flatten().copied().collect()
+                    } else {
+                        Vec::new()
+                    };
+                    let path = format!("{g}/{}/points", gr.group);
+                    self.h5
+                        .write_rows_f64(&path, gr.n_points as u64, 3, 0, &flat)?;
+                    self.bytes_written += 8 * flat.len() as u64;
+                    xg.points_paths.push(path);
+                }
+            }
+            self.h5.flush()?;
             self.steps.push(XdmfStep {
                 time: rec.time,
                 attrs,
             });
-            if plastic {
-                let last = self.steps.last_mut().expect("just pushed");
-                last.attrs.push(attr(
-                    "plastic_strain",
-                    Center::Cell,
-                    AttrKind::Scalar,
-                    self.n_elems,
-                    1,
-                ));
-            }
-            if !self.walls.is_empty() {
-                let last = self.steps.last_mut().expect("just pushed");
-                for (name, kind) in contact_fields {
-                    last.attrs
-                        .push(attr(name, Center::Node, kind, self.n_nodes, kind.n_cols()));
-                }
-            }
             let r = if comm.rank() == 0 {
-                write_xdmf_with_walls(&self.xmf_path, &self.xmesh, &self.steps, &self.xwalls)
+                write_xdmf_with_grids(&self.xmf_path, &self.xmesh, &self.steps, &self.xgrids)
             } else {
                 Ok(())
             };
@@ -512,11 +446,10 @@ impl ResultsWriter {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::model::contact::{ContactReport, WallReport};
     use crate::solve::nonlinear::SolveStats;
     use crate::solve::time::energy::Energies;
 
-    fn record(energies: bool, contact: Option<ContactReport>) -> StepRecord {
+    fn record(energies: bool, columns: Vec<f64>) -> StepRecord {
         StepRecord {
             step: 3,
             time: 0.75,
@@ -526,7 +459,7 @@ mod tests {
             wall_seconds: 0.1,
             displacements: vec![[0.0; 3], [0.5; 3]],
             energies: energies.then(Energies::default),
-            contact,
+            columns,
         }
     }
 
@@ -538,75 +471,71 @@ mod tests {
     fn history_header_and_rows_have_the_same_columns() {
         let sets = vec!["top".to_string()];
         let disp = vec!["a".to_string(), "b".to_string()];
-        // Without walls: no contact columns at all.
+        // Without contribution columns: none at all.
         for dynamic in [false, true] {
             let h = history_header(&sets, &disp, dynamic, &[]);
             assert!(!h.contains("max_penetration"), "{h}");
-            let r = history_row(&record(dynamic, None), 0);
+            let r = history_row(&record(dynamic, vec![]), &[]);
             assert_eq!(cols(&h).len(), cols(&r).len(), "{h}\n{r}");
         }
-        // Two walls: 9 columns each, then penetration and the two counts, last.
-        let walls = vec!["floor".to_string(), "punch".to_string()];
-        let report = ContactReport {
-            walls: vec![
-                WallReport {
-                    force: [0.0, 0.0, -15.0],
-                    moment: [-7.5, 7.5, 0.0],
-                    displacement: [0.0, 0.0, 0.25],
-                },
-                WallReport::default(),
-            ],
-            max_penetration: 1e-3,
-            active: 9,
-            sticking: 4,
-        };
+        // A wall's columns and the shared contact columns, last; counts as integers.
+        let names: Vec<String> = [
+            "floor.fx",
+            "floor.fy",
+            "floor.fz",
+            "floor.mx",
+            "max_penetration",
+            "contact_active",
+        ]
+        .iter()
+        .map(|s| s.to_string())
+        .collect();
+        let counts = [false, false, false, false, false, true];
+        let values = vec![0.0, 0.0, -15.0, -7.5, 1e-3, 9.0];
         for dynamic in [false, true] {
-            let h = history_header(&sets, &disp, dynamic, &walls);
+            let h = history_header(&sets, &disp, dynamic, &names);
             let hc = cols(&h);
             let n = hc.len();
             assert_eq!(
-                hc[n - 21..n - 12],
-                [
-                    "floor.fx", "floor.fy", "floor.fz", "floor.mx", "floor.my", "floor.mz",
-                    "floor.ux", "floor.uy", "floor.uz"
-                ]
+                hc[n - 6..],
+                names.iter().map(|s| s.as_str()).collect::<Vec<_>>()[..]
             );
-            assert_eq!(hc[n - 12], "punch.fx");
-            assert_eq!(
-                hc[n - 3..],
-                ["max_penetration", "contact_active", "contact_sticking"]
-            );
-            let r = history_row(&record(dynamic, Some(report.clone())), walls.len());
+            let r = history_row(&record(dynamic, values.clone()), &counts);
             let rc = cols(&r);
             assert_eq!(rc.len(), n, "{h}\n{r}");
-            let at = |name: &str| -> f64 {
-                rc[hc.iter().position(|c| *c == name).unwrap()]
-                    .parse()
-                    .unwrap()
-            };
-            assert_eq!(at("floor.fz"), -15.0);
-            assert_eq!(at("floor.mx"), -7.5);
-            assert_eq!(at("floor.uz"), 0.25);
-            assert_eq!(at("max_penetration"), 1e-3);
-            assert_eq!(at("contact_active"), 9.0);
-            assert_eq!(at("contact_sticking"), 4.0);
-            assert_eq!(at("top.fy"), 2.0);
-            // A record without its report still fills every column.
-            let r = history_row(&record(dynamic, None), walls.len());
+            let at = |name: &str| rc[hc.iter().position(|c| *c == name).unwrap()];
+            assert_eq!(at("floor.fz").parse::<f64>().unwrap(), -15.0);
+            assert_eq!(at("max_penetration").parse::<f64>().unwrap(), 1e-3);
+            assert_eq!(at("contact_active"), "9");
+            assert_eq!(at("top.fy").parse::<f64>().unwrap(), 2.0);
+            // A record without its columns still fills every column.
+            let r = history_row(&record(dynamic, vec![]), &counts);
             assert_eq!(cols(&r).len(), n, "{r}");
-            assert!(r.ends_with(",nan,nan,nan"), "{r}");
+            assert!(r.ends_with(",nan,nan"), "{r}");
         }
     }
 
     #[test]
-    fn wall_groups_are_valid_and_unique() {
-        let names: Vec<String> = ["floor", "a/b", "a_b", ".", "floor2"]
-            .iter()
-            .map(|s| s.to_string())
-            .collect();
+    fn grid_groups_are_valid_and_unique() {
+        let names: Vec<String> = [
+            "walls/floor",
+            "walls/a/b",
+            "walls/a_b",
+            "walls/.",
+            "points/p",
+        ]
+        .iter()
+        .map(|s| s.to_string())
+        .collect();
         assert_eq!(
-            wall_groups(&names),
-            ["floor", "a_b", "a_b_2", "._3", "floor2"]
+            grid_groups(&names),
+            [
+                "walls/floor",
+                "walls/a_b",
+                "walls/a_b_2",
+                "walls/._3",
+                "points/p"
+            ]
         );
     }
 }

@@ -200,14 +200,18 @@ fn attribute(out: &mut String, pad: &str, h5: &str, a: &XdmfAttr) {
     let _ = writeln!(out, "{pad}        </Attribute>");
 }
 
-/// A rigid wall drawn beside the mesh: a triangulated surface (connectivity written
-/// once) whose points are written at every output step, as it moves.
+/// Moving geometry drawn beside the mesh (a rigid wall's surface, a reference point):
+/// cells of one kind (points, segments or triangles) written once, points written at
+/// every output step.
 #[derive(Debug, Clone, PartialEq)]
-pub struct XdmfWall {
+pub struct XdmfGrid {
+    /// The grid's name (ParaView's block name).
     pub name: String,
-    /// HDF5 path of the triangles, i64 `(n_triangles, 3)`, 0-based into the points.
-    pub triangles_path: String,
-    pub n_triangles: u64,
+    /// HDF5 path of the cells, i64 `(n_cells, nodes_per_cell)`, 0-based into the points.
+    pub cells_path: String,
+    pub n_cells: u64,
+    /// 1 (Polyvertex), 2 (Polyline segments) or 3 (Triangle).
+    pub nodes_per_cell: u64,
     pub n_points: u64,
     /// HDF5 path of the points, f64 `(n_points, 3)`, of each step (same order as the steps).
     pub points_paths: Vec<String>,
@@ -215,7 +219,7 @@ pub struct XdmfWall {
 
 /// The whole XDMF document for `steps` (pure: no I/O).
 pub fn xdmf_text(mesh: &XdmfMesh, steps: &[XdmfStep]) -> Result<String> {
-    xdmf_text_with_walls(mesh, steps, &[])
+    xdmf_text_with_grids(mesh, steps, &[])
 }
 
 /// The mesh grid of one step, indented by `pad` more than a grid directly in the time
@@ -270,13 +274,13 @@ fn mesh_grid(
     let _ = writeln!(out, "{pad}      </Grid>");
 }
 
-/// [`xdmf_text`] with rigid walls: each step becomes a spatial collection of the mesh
-/// grid and one triangle grid per wall at that step's position. Without walls the
+/// [`xdmf_text`] with moving geometry: each step becomes a spatial collection of the
+/// mesh grid and one grid per [`XdmfGrid`] at that step's position. Without grids the
 /// document is exactly [`xdmf_text`]'s (one uniform grid per step).
-pub fn xdmf_text_with_walls(
+pub fn xdmf_text_with_grids(
     mesh: &XdmfMesh,
     steps: &[XdmfStep],
-    walls: &[XdmfWall],
+    walls: &[XdmfGrid],
 ) -> Result<String> {
     for a in mesh
         .static_cell_attrs
@@ -294,19 +298,20 @@ pub fn xdmf_text_with_walls(
     for w in walls {
         if w.points_paths.len() != steps.len() {
             return Err(Error::runtime(format!(
-                "XDMF wall '{}': points for {} steps, there are {}",
+                "XDMF grid '{}': points for {} steps, there are {}",
                 w.name,
                 w.points_paths.len(),
                 steps.len()
             )));
         }
         if w.name.is_empty()
-            || !w.triangles_path.starts_with('/')
+            || !w.cells_path.starts_with('/')
             || w.points_paths.iter().any(|p| !p.starts_with('/'))
+            || !(1..=3).contains(&w.nodes_per_cell)
         {
             return Err(Error::runtime(format!(
-                "XDMF wall '{}': empty name or relative HDF5 path",
-                w.name
+                "XDMF grid '{}': empty name, relative HDF5 path or {} points per cell",
+                w.name, w.nodes_per_cell
             )));
         }
     }
@@ -334,20 +339,25 @@ pub fn xdmf_text_with_walls(
         for w in walls {
             let _ = writeln!(
                 out,
-                "        <Grid Name=\"wall_{}\" GridType=\"Uniform\">",
+                "        <Grid Name=\"{}\" GridType=\"Uniform\">",
                 esc(&w.name)
             );
+            let topology = match w.nodes_per_cell {
+                3 => "TopologyType=\"Triangle\"",
+                2 => "TopologyType=\"Polyline\" NodesPerElement=\"2\"",
+                _ => "TopologyType=\"Polyvertex\" NodesPerElement=\"1\"",
+            };
             let _ = writeln!(
                 out,
-                "          <Topology TopologyType=\"Triangle\" NumberOfElements=\"{}\">",
-                w.n_triangles
+                "          <Topology {topology} NumberOfElements=\"{}\">",
+                w.n_cells
             );
             data_item(
                 &mut out,
                 "            ",
                 h5,
-                &w.triangles_path,
-                &dims(w.n_triangles, 3),
+                &w.cells_path,
+                &dims(w.n_cells, w.nodes_per_cell),
                 "Int",
                 8,
             );
@@ -375,17 +385,17 @@ pub fn xdmf_text_with_walls(
 /// the steps so far. Called by rank 0 after each output step, so that a run that
 /// stops early still leaves a valid file describing what was written.
 pub fn write_xdmf(path: &Path, mesh: &XdmfMesh, steps: &[XdmfStep]) -> Result<()> {
-    write_xdmf_with_walls(path, mesh, steps, &[])
+    write_xdmf_with_grids(path, mesh, steps, &[])
 }
 
-/// [`write_xdmf`] with rigid walls drawn beside the mesh ([`xdmf_text_with_walls`]).
-pub fn write_xdmf_with_walls(
+/// [`write_xdmf`] with moving geometry drawn beside the mesh ([`xdmf_text_with_grids`]).
+pub fn write_xdmf_with_grids(
     path: &Path,
     mesh: &XdmfMesh,
     steps: &[XdmfStep],
-    walls: &[XdmfWall],
+    grids: &[XdmfGrid],
 ) -> Result<()> {
-    let text = xdmf_text_with_walls(mesh, steps, walls)?;
+    let text = xdmf_text_with_grids(mesh, steps, grids)?;
     let name = path
         .file_name()
         .ok_or_else(|| Error::runtime(format!("XDMF path {} has no file name", path.display())))?;
@@ -605,10 +615,11 @@ print(json.dumps(out))
             .unwrap();
         f.write_rows_i64("/walls/floor/triangles", 2, 3, 0, &[0, 1, 2, 0, 2, 3])
             .unwrap();
-        let mut wall = XdmfWall {
-            name: "floor".into(),
-            triangles_path: "/walls/floor/triangles".into(),
-            n_triangles: 2,
+        let mut wall = XdmfGrid {
+            name: "wall_floor".into(),
+            cells_path: "/walls/floor/triangles".into(),
+            n_cells: 2,
+            nodes_per_cell: 3,
             n_points: 4,
             points_paths: Vec::new(),
         };
@@ -641,11 +652,11 @@ print(json.dumps(out))
         };
         // Without walls the document is the plain one.
         assert_eq!(
-            xdmf_text_with_walls(&mesh, &steps, &[]).unwrap(),
+            xdmf_text_with_grids(&mesh, &steps, &[]).unwrap(),
             xdmf_text(&mesh, &steps).unwrap()
         );
         let xmf = dir.join("run.xmf");
-        write_xdmf_with_walls(&xmf, &mesh, &steps, std::slice::from_ref(&wall)).unwrap();
+        write_xdmf_with_grids(&xmf, &mesh, &steps, std::slice::from_ref(&wall)).unwrap();
         let j = python_json(CHECK_WALLS, &[xmf.to_str().unwrap()]);
         let j = j.as_array().unwrap();
         assert_eq!(j.len(), 2);
@@ -669,7 +680,7 @@ print(json.dumps(out))
         }
         // A wall must have points for every step.
         wall.points_paths.pop();
-        let e = xdmf_text_with_walls(&mesh, &steps, &[wall]).unwrap_err();
+        let e = xdmf_text_with_grids(&mesh, &steps, &[wall]).unwrap_err();
         assert!(e.message.contains("points for 1 steps, there are 2"), "{e}");
         let _ = std::fs::remove_dir_all(&dir);
     }

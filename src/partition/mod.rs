@@ -3,7 +3,6 @@
 //! a hash of the mesh, and the split of a model into per-rank pieces ([`distribute`]).
 
 pub mod cache;
-pub mod distribute;
 
 use crate::mesh::{ElemKind, Mesh};
 use crate::{Error, Result};

@@ -3,13 +3,18 @@
 //! deck field and what was expected.
 
 use super::deck::*;
+use super::{OutputSettings, RunSettings, Scene};
 use crate::fem::element::{check_reference, Formulation};
+use crate::linalg::GmresOptions;
 use crate::material::Hardening;
 use crate::mesh::cylinder::{cylinder_mesh, ring_mesh, CylinderSpec, RingSpec};
 use crate::mesh::generate::{box_mesh, distort_interior, BoxSpec};
 use crate::mesh::select::{bounding_box, faces_in_box, nodes_in_box, nodes_of_faces};
 use crate::mesh::{gmsh, ElemKind, FaceRef, Mesh};
 use crate::model::def::*;
+use crate::model::loads::LoadDef;
+use crate::solve::nonlinear::NonlinearOptions;
+use crate::solve::Analysis;
 use crate::{Error, Result};
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::Path;
@@ -52,8 +57,9 @@ fn known(names: &BTreeMap<String, impl Sized>) -> String {
     }
 }
 
-/// Build and validate the model. `deck_dir` resolves relative mesh file paths.
-pub fn build(deck: &Deck, deck_dir: &Path) -> Result<ModelDef> {
+/// Build and validate the model and its run settings. `deck_dir` resolves relative
+/// mesh file paths.
+pub fn build(deck: &Deck, deck_dir: &Path) -> Result<Scene> {
     if deck.scene.name.trim().is_empty() {
         return Err(err("scene.name", "expected a non-empty name"));
     }
@@ -398,7 +404,7 @@ pub fn build(deck: &Deck, deck_dir: &Path) -> Result<ModelDef> {
                 finite3(force, "force")?;
                 let nodes = set_nodes(format!("{f}.set"), set)?;
                 resolved_sets.insert(set.clone(), nodes);
-                Load::Nodal {
+                LoadDef::Nodal {
                     set: set.clone(),
                     force: *force,
                     curve: curve(format!("{f}.curve"), c)?,
@@ -411,7 +417,7 @@ pub fn build(deck: &Deck, deck_dir: &Path) -> Result<ModelDef> {
             } => {
                 finite3(traction, "traction")?;
                 surface(s)?;
-                Load::Traction {
+                LoadDef::Traction {
                     surface: s.clone(),
                     traction: *traction,
                     curve: curve(format!("{f}.curve"), c)?,
@@ -426,7 +432,7 @@ pub fn build(deck: &Deck, deck_dir: &Path) -> Result<ModelDef> {
                     return Err(err(format!("{f}.pressure"), "expected a finite number"));
                 }
                 surface(s)?;
-                Load::Pressure {
+                LoadDef::Pressure {
                     surface: s.clone(),
                     pressure: *pressure,
                     curve: curve(format!("{f}.curve"), c)?,
@@ -506,8 +512,23 @@ pub fn build(deck: &Deck, deck_dir: &Path) -> Result<ModelDef> {
         },
     )?;
 
-    Ok(ModelDef {
-        walls,
+    let couplings = super::coupling::build_couplings(
+        &deck.couplings,
+        &super::coupling::CouplingInputs {
+            mesh: &mesh,
+            node_sets: &node_sets,
+            surfaces: &surfaces,
+            set_nodes: &set_nodes,
+            curve: &curve,
+            analysis: deck.analysis.kind,
+        },
+    )?;
+    let mut contributions: Vec<ContributionDef> =
+        loads.into_iter().map(ContributionDef::Load).collect();
+    contributions.extend(walls.into_iter().map(ContributionDef::Wall));
+    contributions.extend(couplings.into_iter().map(ContributionDef::Coupling));
+    let model = ModelDef {
+        contributions,
         mesh,
         part_names: deck.parts.iter().map(|p| p.name.clone()).collect(),
         part_material,
@@ -516,17 +537,61 @@ pub fn build(deck: &Deck, deck_dir: &Path) -> Result<ModelDef> {
         node_sets: resolved_sets,
         surfaces,
         constraints,
-        loads,
         reaction_sets,
-        settings: Settings {
-            scene: deck.scene.name.clone(),
-            units: deck.scene.units,
-            analysis: deck.analysis.clone(),
-            solver: deck.solver.clone(),
-            output: deck.output.clone(),
-            initial_velocity,
-        },
+        displacement_sets: deck.output.displacements.clone(),
+        initial_velocity,
+    };
+    Ok(Scene {
+        model,
+        run: run_settings(deck),
     })
+}
+
+/// `[analysis]`, `[solver]` and `[output]` with their defaults filled in (validated).
+fn run_settings(deck: &Deck) -> RunSettings {
+    let a = &deck.analysis;
+    let s = &deck.solver;
+    RunSettings {
+        name: deck.scene.name.clone(),
+        units: deck.scene.units,
+        analysis: Analysis {
+            kind: a.kind,
+            end_time: a.end_time,
+            step: a.step,
+            min_step: a.min_step.unwrap_or(a.step * 1e-3),
+            max_step: a.max_step.unwrap_or(a.step),
+            scheme: a.scheme.unwrap_or(Scheme::GeneralizedAlpha),
+            rho_inf: a.rho_inf.unwrap_or(0.9),
+            mass: a.mass.unwrap_or(MassKind::Consistent),
+            dt_factor: a
+                .dt_factor
+                .unwrap_or(crate::solve::time::explicit::DEFAULT_DT_FACTOR),
+        },
+        solver: NonlinearOptions {
+            kind: s.nonlinear,
+            max_iterations: s.max_iterations,
+            residual_rtol: s.residual_rtol,
+            increment_rtol: s.increment_rtol,
+            energy_rtol: s.energy_rtol,
+            linear: GmresOptions {
+                rtol: s.linear.rtol,
+                atol: 0.0,
+                restart: s.linear.restart,
+                max_iterations: s.linear.max_iterations,
+            },
+            preconditioner: s.linear.preconditioner,
+            pc_lag: s.linear.lag,
+            bfgs_reform: s.bfgs_reform,
+            fd_delta: s.fd_delta,
+            fd_rule: s.fd_step,
+            char_length: 0.0,
+            line_search: s.line_search.unwrap_or(false),
+        },
+        output: OutputSettings {
+            every: deck.output.every,
+            interval: deck.output.interval.unwrap_or(a.end_time / 100.0),
+        },
+    }
 }
 
 fn part_mesh(m: &MeshDeck, f: &str, part: u32, deck_dir: &Path) -> Result<Mesh> {

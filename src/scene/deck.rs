@@ -2,6 +2,9 @@
 //! (`deny_unknown_fields` everywhere) and every error names its field path, e.g.
 //! `parts[0].mesh.cells: invalid length 2, expected an array of length 3`.
 
+pub use crate::linalg::PcKind;
+pub use crate::solve::nonlinear::{FdRule, SolverKind};
+pub use crate::solve::{AnalysisKind, MassKind, Scheme};
 use serde::{Deserialize, Serialize};
 
 #[derive(Debug, Clone, Deserialize, Serialize)]
@@ -32,6 +35,9 @@ pub struct Deck {
     /// Rigid walls (contact, DESIGN.md "Contact kinds").
     #[serde(default)]
     pub walls: Vec<super::walls::WallDeck>,
+    /// Distributing couplings (a reference point tied to nodes, RBE3).
+    #[serde(default)]
+    pub couplings: Vec<super::coupling::CouplingDeck>,
 }
 
 /// An initial velocity on a part or a node set (exactly one of `part`, `set`).
@@ -405,39 +411,6 @@ pub enum LoadDeck {
     },
 }
 
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize)]
-#[serde(rename_all = "lowercase")]
-pub enum AnalysisKind {
-    /// Load stepping over pseudo-time.
-    Static,
-    /// Implicit dynamics (generalized-α family).
-    Implicit,
-    /// Explicit central difference with lumped mass.
-    Explicit,
-}
-
-/// Implicit time integration schemes.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum SchemeKind {
-    /// Newmark trapezoidal rule (β = 1/4, γ = 1/2): no numerical damping.
-    Newmark,
-    /// Chung & Hulbert (1993) generalized-α with parameters from `rho_inf`.
-    GeneralizedAlpha,
-    /// Hilber–Hughes–Taylor α (α_m = 0) with α_f from `rho_inf` ∈ [1/2, 1].
-    HhtAlpha,
-    /// Wood–Bossak–Zienkiewicz α (α_f = 0: forces at t_{n+1}, for contact) from `rho_inf`.
-    Bossak,
-}
-
-/// Mass matrix of implicit dynamics.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize)]
-#[serde(rename_all = "lowercase")]
-pub enum MassKind {
-    Consistent,
-    Lumped,
-}
-
 #[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct AnalysisDeck {
@@ -458,7 +431,7 @@ pub struct AnalysisDeck {
     pub max_step: Option<f64>,
     /// Implicit: the scheme (default generalized-alpha).
     #[serde(default)]
-    pub scheme: Option<SchemeKind>,
+    pub scheme: Option<Scheme>,
     /// Implicit generalized-α / HHT: spectral radius at infinite frequency (default 0.9).
     #[serde(default)]
     pub rho_inf: Option<f64>,
@@ -470,40 +443,6 @@ pub struct AnalysisDeck {
     pub dt_factor: Option<f64>,
 }
 
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize, Default)]
-#[serde(rename_all = "lowercase")]
-pub enum NonlinearKind {
-    /// Full Newton: assembled Jacobian and a fresh factorization every iteration.
-    #[default]
-    Newton,
-    /// Matthies–Strang BFGS on a stiffness reformed every `bfgs_reform` iterations.
-    Bfgs,
-    /// Jacobian-free Newton–Krylov with a block-Jacobi preconditioner lagged per step.
-    Jfnk,
-}
-
-/// JFNK's finite-difference step rule.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize, Default)]
-#[serde(rename_all = "kebab-case")]
-pub enum FdStepDeck {
-    /// ε = fd_delta · h / ‖v‖, h the mean element length.
-    #[default]
-    Element,
-    /// ε = √((1 + ‖u‖) ε_mach) / ‖v‖.
-    WalkerPernice,
-}
-
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize, Default)]
-#[serde(rename_all = "kebab-case")]
-pub enum PreconditionerKind {
-    /// Block Jacobi: each rank's diagonal block factored exactly.
-    #[default]
-    BlockJacobi,
-    /// Restricted additive Schwarz with one layer of overlap (the ghost nodes).
-    Asm,
-    None,
-}
-
 /// Nonlinear solver settings. Convergence (all must hold): ‖r‖ ≤ residual_rtol · f_ref
 /// with f_ref = max(‖f_ext‖, ‖f_int‖) over all unknowns (so reactions count), the last
 /// correction ‖Δu‖ ≤ increment_rtol · ‖u‖, and its energy |Δu·r| ≤ energy_rtol times the
@@ -512,7 +451,7 @@ pub enum PreconditionerKind {
 #[serde(deny_unknown_fields)]
 pub struct SolverDeck {
     #[serde(default)]
-    pub nonlinear: NonlinearKind,
+    pub nonlinear: SolverKind,
     #[serde(default = "d_max_it")]
     pub max_iterations: usize,
     #[serde(default = "d_rrtol")]
@@ -534,7 +473,7 @@ pub struct SolverDeck {
     pub fd_delta: f64,
     /// JFNK: the rule for the finite-difference step.
     #[serde(default)]
-    pub fd_step: FdStepDeck,
+    pub fd_step: FdRule,
     /// BFGS: reassemble and refactor the stiffness every n iterations (and on divergence).
     #[serde(default = "d_bfgs_reform")]
     pub bfgs_reform: usize,
@@ -564,7 +503,7 @@ fn d_ertol() -> f64 {
 impl Default for SolverDeck {
     fn default() -> Self {
         Self {
-            nonlinear: NonlinearKind::Newton,
+            nonlinear: SolverKind::Newton,
             max_iterations: d_max_it(),
             residual_rtol: d_rrtol(),
             increment_rtol: d_urtol(),
@@ -572,7 +511,7 @@ impl Default for SolverDeck {
             linear: LinearDeck::default(),
             line_search: None,
             fd_delta: d_fd_delta(),
-            fd_step: FdStepDeck::Element,
+            fd_step: FdRule::Element,
             bfgs_reform: d_bfgs_reform(),
         }
     }
@@ -589,7 +528,7 @@ pub struct LinearDeck {
     #[serde(default = "d_lmax")]
     pub max_iterations: usize,
     #[serde(default)]
-    pub preconditioner: PreconditionerKind,
+    pub preconditioner: PcKind,
     /// Reuse a block-Jacobi factorization for this many further Jacobians (Newton
     /// iterations, across steps) before refactoring; 0 = refactor every time. A kept
     /// factorization under which GMRES fails is refreshed at once.
@@ -613,7 +552,7 @@ impl Default for LinearDeck {
             rtol: d_lrtol(),
             restart: d_restart(),
             max_iterations: d_lmax(),
-            preconditioner: PreconditionerKind::BlockJacobi,
+            preconditioner: PcKind::BlockJacobi,
             lag: 0,
         }
     }

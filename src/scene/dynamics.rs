@@ -10,11 +10,7 @@ fn err(field: impl std::fmt::Display, msg: impl std::fmt::Display) -> Error {
 }
 
 fn kind_name(k: AnalysisKind) -> &'static str {
-    match k {
-        AnalysisKind::Static => "static",
-        AnalysisKind::Implicit => "implicit",
-        AnalysisKind::Explicit => "explicit",
-    }
+    k.name()
 }
 
 /// `[analysis]` and the output keys that depend on it.
@@ -84,12 +80,12 @@ pub fn check_analysis(deck: &Deck) -> Result<()> {
         }
     }
     if let Some(r) = a.rho_inf {
-        let lo = if a.scheme == Some(SchemeKind::HhtAlpha) {
+        let lo = if a.scheme == Some(Scheme::HhtAlpha) {
             0.5
         } else {
             0.0
         };
-        if a.scheme == Some(SchemeKind::Newmark) {
+        if a.scheme == Some(Scheme::Newmark) {
             return Err(err(
                 "analysis.rho_inf",
                 "not used by scheme = \"newmark\" (the trapezoidal rule has ρ∞ = 1)",

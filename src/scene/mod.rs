@@ -1,13 +1,50 @@
 //! Scenes: decks (TOML), the built-in ones embedded in the binary, and the builder that
-//! turns a deck into a validated [`crate::model::def::ModelDef`].
+//! turns a deck into a validated [`Scene`]: the model ([`crate::model::def::ModelDef`])
+//! and how to run it ([`RunSettings`]). Deck types stay here: the layers below read
+//! only what the scene parses the deck into.
 
 pub mod build;
+pub mod coupling;
 pub mod deck;
 mod dynamics;
 pub mod walls;
 
+use crate::model::def::ModelDef;
+use crate::solve::nonlinear::NonlinearOptions;
+use crate::solve::Analysis;
 use crate::{Error, Result};
+use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
+
+pub use deck::Units;
+
+/// What a deck asks for: the model and how to run it.
+#[derive(Debug, Clone)]
+pub struct Scene {
+    pub model: ModelDef,
+    pub run: RunSettings,
+}
+
+/// How to run a scene: `[scene]`, `[analysis]`, `[solver]`, `[output]` resolved.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct RunSettings {
+    /// The scene's name (file names of its results).
+    pub name: String,
+    pub units: Units,
+    pub analysis: Analysis,
+    /// The nonlinear solver and its linear solves (`char_length` is set at run time).
+    pub solver: NonlinearOptions,
+    pub output: OutputSettings,
+}
+
+/// When fields are written.
+#[derive(Debug, Clone, Copy, Serialize, Deserialize)]
+pub struct OutputSettings {
+    /// Static runs: every n-th converged step (the last always).
+    pub every: usize,
+    /// Dynamic runs: at every multiple of this time (and the initial and last states).
+    pub interval: f64,
+}
 
 /// Built-in scenes: (name, one-line description, deck text).
 pub const BUILTIN: &[(&str, &str, &str)] = &[
@@ -129,7 +166,7 @@ pub fn load(name_or_path: &str) -> Result<Source> {
 }
 
 /// Parse, build and validate a scene.
-pub fn model(src: &Source) -> Result<crate::model::def::ModelDef> {
+pub fn read(src: &Source) -> Result<Scene> {
     let deck =
         deck::parse(&src.text).map_err(|e| Error::input(format!("deck {}: {e}", src.label)))?;
     build::build(&deck, &src.dir).map_err(|e| e.context(format!("deck {}", src.label)))

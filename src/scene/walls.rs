@@ -3,12 +3,14 @@
 //! needs: sizes, axes, a tracked set that exists and no tracked node starting inside.
 
 use crate::contact::motion::{MotionKind, RigidMotion, Rotation, Translation};
-use crate::contact::wall::{project, ContactMethod, ShapeDef, WallDef};
+use crate::contact::wall::{project, ContactMethod, ShapeDef};
+use crate::curve::Curve;
+use crate::mesh::select::tributary_areas;
 use crate::mesh::{FaceRef, Mesh};
-use crate::model::def::Curve;
+use crate::model::walls::WallDef;
 use crate::{Error, Result};
 use serde::{Deserialize, Serialize};
-use std::collections::{BTreeMap, BTreeSet};
+use std::collections::BTreeSet;
 
 /// The shape keyword of a wall.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize)]
@@ -116,17 +118,6 @@ fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
         a[2] * b[0] - a[0] * b[2],
         a[0] * b[1] - a[1] * b[0],
     ]
-}
-
-/// Area of a boundary face (quad: half the diagonals' cross product; triangle: half
-/// the edges').
-fn face_area(x: &[[f64; 3]]) -> f64 {
-    let sub = |a: [f64; 3], b: [f64; 3]| [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
-    match x.len() {
-        4 => 0.5 * norm(cross(sub(x[2], x[0]), sub(x[3], x[1]))),
-        3 => 0.5 * norm(cross(sub(x[1], x[0]), sub(x[2], x[0]))),
-        _ => 0.0,
-    }
 }
 
 /// What a wall needs from the rest of the deck.
@@ -307,17 +298,15 @@ fn build_wall(w: &WallDeck, f: &str, inp: &WallInputs) -> Result<WallDef> {
     };
     // Tributary areas on the tracked surface: boundary faces whose nodes are all tracked.
     let tracked: BTreeSet<usize> = nodes.iter().copied().collect();
-    let mut area: BTreeMap<usize, f64> = BTreeMap::new();
-    for fr in inp.boundary {
-        let fnodes = inp.mesh.face_nodes(*fr);
-        if fnodes.iter().all(|n| tracked.contains(n)) {
-            let x: Vec<[f64; 3]> = fnodes.iter().map(|&n| inp.mesh.coords[n]).collect();
-            let a = face_area(&x) / fnodes.len() as f64;
-            for n in fnodes {
-                *area.entry(n).or_default() += a;
-            }
-        }
-    }
+    let area = tributary_areas(
+        inp.mesh,
+        inp.boundary.iter().filter(|fr| {
+            inp.mesh
+                .face_nodes(**fr)
+                .iter()
+                .all(|n| tracked.contains(n))
+        }),
+    );
     let areas = nodes
         .iter()
         .map(|n| area.get(n).copied().unwrap_or(0.0))

@@ -1,7 +1,11 @@
-//! Solvers: distributed linear algebra ([`linear`]), nonlinear solvers ([`nonlinear`])
-//! load stepping ([`stepping`]) and time integration ([`time`]).
+//! Solvers that drive the model: nonlinear solvers ([`nonlinear`]), one step controller
+//! ([`control`]) shared by load stepping ([`stepping`]) and time integration ([`time`]).
+//! The distributed linear algebra they use is [`crate::linalg`].
 
-pub mod linear;
+pub mod analysis;
+pub mod control;
 pub mod nonlinear;
 pub mod stepping;
 pub mod time;
+
+pub use analysis::{Analysis, AnalysisKind, MassKind, Scheme};

@@ -1,13 +1,16 @@
-//! Static load stepping over pseudo-time: t = step, 2·step, ..., end_time (the last
-//! step shortened to land on end_time). Each step is one nonlinear solve from the
-//! previous converged state. A step that fails ends the run (retries come with the
-//! step controller of the solver issue); everything converged before it is kept.
+//! Static load stepping over pseudo-time up to the end time, each step one nonlinear
+//! solve from the previous converged state, the step size from [`StepControl`] (cut on
+//! failure, grown after easy steps). A run that cannot go on keeps everything
+//! converged before it.
 
+use crate::linalg::matrix::DistMatrix;
 use crate::model::Model;
 use crate::parallel::Comm;
-use crate::solve::linear::lagged::LaggedBlockJacobi;
-use crate::solve::linear::matrix::DistMatrix;
-use crate::solve::nonlinear::{solve, NonlinearOptions, NonlinearProblem, SolveStats};
+use crate::solve::control::StepControl;
+use crate::solve::nonlinear::{
+    solve, NonlinearOptions, NonlinearProblem, Preconditioning, SolveStats,
+};
+use crate::solve::Analysis;
 use crate::Result;
 use std::time::Instant;
 
@@ -40,8 +43,8 @@ pub struct StepRecord {
     pub displacements: Vec<[f64; 3]>,
     /// Energies of dynamic runs (None for static ones).
     pub energies: Option<crate::solve::time::energy::Energies>,
-    /// Wall forces, penetration and contact counts (None for models without walls).
-    pub contact: Option<crate::model::contact::ContactReport>,
+    /// The contributions' history columns ([`Model::columns`]), reduced over ranks.
+    pub columns: Vec<f64>,
 }
 
 /// Totals over the run.
@@ -60,70 +63,39 @@ pub struct RunTotals {
     pub failure: Option<String>,
 }
 
-/// The pseudo-times of the steps.
-pub fn step_times(end: f64, dt: f64) -> Vec<f64> {
-    let n = ((end / dt) - 1e-9).ceil().max(1.0) as usize;
-    (1..=n)
-        .map(|i| if i == n { end } else { i as f64 * dt })
-        .collect()
+impl RunTotals {
+    /// Add one nonlinear solve's counts and times.
+    pub fn add(&mut self, s: &SolveStats) {
+        self.nonlinear_iterations += s.iterations;
+        self.linear_iterations += s.linear_iterations;
+        self.residual_evaluations += s.residual_evaluations;
+        self.factorizations += s.factorizations;
+        self.seconds_assembly += s.seconds_assembly;
+        self.seconds_linear += s.seconds_linear;
+    }
 }
 
 /// Called with every converged step, its solution and the model (output, progress).
 pub type StepObserver<'a> = dyn FnMut(&StepRecord, &[f64], &Model) -> Result<()> + 'a;
-
-/// Step-size control: a step that fails is retried from the last converged state with
-/// half the step (a counted retry; the lagged preconditioner is refreshed); after a step
-/// that converged in at most `easy_iterations`, the step grows by `growth` up to
-/// `max_step`. Below `min_step` the run ends (everything converged so far is kept).
-#[derive(Debug, Clone)]
-pub struct StepControl {
-    pub step: f64,
-    pub min_step: f64,
-    pub max_step: f64,
-    pub growth: f64,
-    pub easy_iterations: usize,
-}
-
-impl StepControl {
-    pub fn from_analysis(a: &crate::scene::deck::AnalysisDeck, max_iterations: usize) -> Self {
-        Self {
-            step: a.step,
-            min_step: a.min_step.unwrap_or(a.step * 1e-3),
-            max_step: a.max_step.unwrap_or(a.step),
-            growth: 1.5,
-            easy_iterations: (max_iterations / 4).max(3),
-        }
-    }
-}
 
 /// Run the static analysis; `on_step` sees every converged step with the solution.
 pub fn run_static(
     comm: &dyn Comm,
     model: &mut Model,
     u: &mut Vec<f64>,
+    analysis: &Analysis,
     opts: &NonlinearOptions,
     on_step: &mut StepObserver,
 ) -> Result<RunTotals> {
-    let a = model.local.settings.analysis.clone();
-    let ctl = StepControl::from_analysis(&a, opts.max_iterations);
+    let mut ctl = StepControl::new(analysis, opts.max_iterations);
     let n = model.n_owned_dofs();
     u.resize(n, 0.0);
     let mut r = vec![0.0; n];
     let mut k = model.new_matrix(comm);
-    let mut pc = LaggedBlockJacobi::new(opts.pc_lag);
+    let mut pc = Preconditioning::new(opts.preconditioner, opts.pc_lag);
     let mut tot = RunTotals::default();
-    let end = a.end_time;
-    let mut t_done = 0.0;
-    let mut dt = ctl.step.min(ctl.max_step);
-    let mut step = 0;
-    let mut retries = 0;
     let mut t0 = Instant::now();
-    while t_done < end * (1.0 - 1e-12) {
-        // Land exactly on the end time; avoid a sliver of a last step.
-        let mut t = t_done + dt;
-        if t > end * (1.0 - 1e-9) || end - t < 1e-3 * dt {
-            t = end;
-        }
+    while let Some((_, t)) = ctl.next() {
         let g = model.prescribed(t);
         let mut trial = u.clone();
         let stats = {
@@ -132,12 +104,7 @@ pub fn run_static(
                 comm, &mut prob, &mut trial, &mut r, &g, &mut k, &mut pc, opts,
             )?
         };
-        tot.nonlinear_iterations += stats.iterations;
-        tot.linear_iterations += stats.linear_iterations;
-        tot.residual_evaluations += stats.residual_evaluations;
-        tot.factorizations += stats.factorizations;
-        tot.seconds_assembly += stats.seconds_assembly;
-        tot.seconds_linear += stats.seconds_linear;
+        tot.add(&stats);
         if !stats.converged {
             if std::env::var("ALFE_DEBUG").is_ok() {
                 eprintln!(
@@ -145,27 +112,18 @@ pub fn run_static(
                     stats.residual_history, stats.reason
                 );
             }
-            let tried = t - t_done;
-            dt = 0.5 * tried;
             pc.invalidate();
-            if dt < ctl.min_step {
-                tot.failure = Some(format!(
-                    "step {} (t = {t}) did not converge: {}; the step was cut {retries} time(s) to {tried:.3e}, the minimum is {:.3e}",
-                    step + 1,
-                    stats.reason,
-                    ctl.min_step
-                ));
+            if let Err(why) = ctl.reject(t, &stats.reason, "step") {
+                tot.failure = Some(why);
                 return Ok(tot);
             }
-            retries += 1;
             tot.retries += 1;
             continue;
         }
         model.commit();
         *u = trial;
-        step += 1;
+        let (step, retries) = ctl.accept(t, stats.iterations);
         tot.steps += 1;
-        let easy = stats.iterations <= ctl.easy_iterations;
         let rec = StepRecord {
             step,
             time: t,
@@ -173,34 +131,13 @@ pub fn run_static(
             stats,
             retries,
             wall_seconds: t0.elapsed().as_secs_f64(),
-            displacements: model.mean_displacements(
-                comm,
-                u,
-                &model.local.settings.output.displacements,
-            ),
+            displacements: model.mean_displacements(comm, u),
             energies: None,
-            contact: model.contact_report(comm),
+            columns: model.column_values(comm, u, t),
         };
         on_step(&rec, u, model)?;
-        if easy && retries == 0 {
-            dt = (dt * ctl.growth).min(ctl.max_step);
-        }
-        t_done = t;
-        retries = 0;
         t0 = Instant::now();
     }
     tot.converged = true;
     Ok(tot)
-}
-
-#[cfg(test)]
-mod tests {
-    #[test]
-    fn step_times_land_on_the_end() {
-        assert_eq!(super::step_times(1.0, 0.25), vec![0.25, 0.5, 0.75, 1.0]);
-        let t = super::step_times(1.0, 0.3);
-        assert_eq!(t.len(), 4);
-        assert_eq!(*t.last().unwrap(), 1.0);
-        assert_eq!(super::step_times(1.0, 0.1).len(), 10);
-    }
 }

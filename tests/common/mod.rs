@@ -57,3 +57,11 @@ pub fn edit(text: &str, from: &str, to: &str) -> String {
 pub fn rel_err(a: f64, b: f64) -> f64 {
     (a - b).abs() / b.abs().max(f64::MIN_POSITIVE)
 }
+
+/// A published output field of a finished run (one rank: every row), at its last step.
+pub fn field(out: &RunOutcome, name: &str) -> Vec<f64> {
+    let t = out.steps.last().map_or(0.0, |s| s.time);
+    out.model
+        .field(&SerialComm, &out.u, t, name)
+        .unwrap_or_else(|| panic!("no field {name}"))
+}

@@ -45,11 +45,10 @@
 //! (`common::evaluate`, `common::Monitor`); `iterations` counts search directions.
 
 use super::common::{evaluate, precond_solve, Constraints, Eval, Monitor, Verdict};
+use super::Preconditioning;
 use super::{NonlinearOptions, NonlinearProblem, SolveStats};
+use crate::linalg::matrix::DistMatrix;
 use crate::parallel::Comm;
-use crate::solve::linear::lagged::LaggedPreconditioner;
-use crate::solve::linear::matrix::DistMatrix;
-use crate::solve::linear::PcKind;
 use crate::{ErrorKind, Result};
 use std::time::Instant;
 
@@ -248,7 +247,7 @@ pub fn bfgs(
     r: &mut [f64],
     prescribed: &[(usize, f64)],
     k: &mut DistMatrix,
-    pc: &mut LaggedPreconditioner,
+    pc: &mut Preconditioning,
     opts: &NonlinearOptions,
 ) -> Result<SolveStats> {
     // The factorization lives from one reform to the next: no refactor on the lag count.
@@ -270,8 +269,7 @@ fn reform(
     ev: &Eval,
     cons: &Constraints,
     k: &mut DistMatrix,
-    pc: &mut LaggedPreconditioner,
-    opts: &NonlinearOptions,
+    pc: &mut Preconditioning,
     gap: &mut [f64],
     kd: &mut [f64],
     st: &mut SolveStats,
@@ -294,10 +292,10 @@ fn reform(
     }
     k.constrain(comm, &cons.dofs);
     st.seconds_assembly += t1.elapsed().as_secs_f64();
-    if opts.preconditioner != PcKind::None {
+    if pc.is_factored() {
         let t2 = Instant::now();
         pc.invalidate();
-        let res = pc.update(comm, k, opts.preconditioner);
+        let res = pc.update(comm, k);
         st.seconds_linear += t2.elapsed().as_secs_f64();
         match res {
             Ok(f) => st.factorizations += f as usize,
@@ -318,7 +316,7 @@ fn run(
     r: &mut [f64],
     prescribed: &[(usize, f64)],
     k: &mut DistMatrix,
-    pc: &mut LaggedPreconditioner,
+    pc: &mut Preconditioning,
     opts: &NonlinearOptions,
 ) -> Result<SolveStats> {
     let n = u.len();
@@ -361,7 +359,7 @@ fn run(
         }
         if need_reform || since_reform >= reform_every || (ev.gap > 0.0 && !k_at_current) {
             if !reform(
-                comm, problem, u, &ev, &cons, k, pc, opts, &mut gap, &mut kd, &mut st,
+                comm, problem, u, &ev, &cons, k, pc, &mut gap, &mut kd, &mut st,
             )? {
                 return Ok(st);
             }
@@ -381,18 +379,8 @@ fn run(
                 rhs[i] = if cons.is_c[i] { gap[i] } else { -r[i] - kd[i] };
             }
             d.copy_from_slice(&gap);
-            if precond_solve(
-                comm,
-                &mut op,
-                kref,
-                pc,
-                &rhs,
-                &mut d,
-                &opts.linear,
-                opts.preconditioner,
-                &mut st,
-            )?
-            .is_none()
+            if precond_solve(comm, &mut op, kref, pc, &rhs, &mut d, &opts.linear, &mut st)?
+                .is_none()
             {
                 return Ok(st);
             }
@@ -419,19 +407,7 @@ fn run(
         // d = −H r_f by the two-loop recursion with H₀ = K₀⁻¹.
         let alpha = pairs.first_loop(&a, &rf, &mut rhs);
         d.iter_mut().for_each(|x| *x = 0.0);
-        if precond_solve(
-            comm,
-            &mut op,
-            kref,
-            pc,
-            &rhs,
-            &mut d,
-            &opts.linear,
-            opts.preconditioner,
-            &mut st,
-        )?
-        .is_none()
-        {
+        if precond_solve(comm, &mut op, kref, pc, &rhs, &mut d, &opts.linear, &mut st)?.is_none() {
             return Ok(st);
         }
         cons.zero_constrained(&mut d);

@@ -2,11 +2,11 @@
 //! preconditioned linear solve with a (lagged) factored preconditioner, and the
 //! backtracking line search on ‖r_free‖.
 
+use super::Preconditioning;
 use super::{NonlinearOptions, NonlinearProblem, SolveStats};
+use crate::linalg::gmres::{gmres, GmresOptions, GmresStats};
+use crate::linalg::LinearOperator;
 use crate::parallel::Comm;
-use crate::solve::linear::gmres::{gmres, GmresOptions, GmresStats};
-use crate::solve::linear::lagged::LaggedPreconditioner;
-use crate::solve::linear::{Identity, LinearOperator, PcKind, Preconditioner};
 use crate::{ErrorKind, Result};
 use std::time::Instant;
 
@@ -231,28 +231,27 @@ impl Monitor {
 /// still used as the Newton correction.
 pub const ACCEPTABLE_LINEAR_RESIDUAL: f64 = 1e-6;
 
-/// Solve `a x = b` by GMRES preconditioned with the (possibly kept) factorization of the
-/// `kind` of preconditioner in `pc` of the matrix `pc_of` (none for [`PcKind::None`]); a
-/// kept factorization under which GMRES fails is refreshed once. `x` holds the initial guess. `Ok(None)`: failed (reason set).
+/// Solve `a x = b` by GMRES preconditioned by `pc` set up on the matrix `pc_of` (or kept
+/// from an earlier one, as its policy says); a kept factorization under which GMRES
+/// fails is refreshed once. `x` holds the initial guess. `Ok(None)`: failed (reason set).
 #[allow(clippy::too_many_arguments)]
 pub fn precond_solve(
     comm: &dyn Comm,
     a: &mut dyn LinearOperator,
-    pc_of: &crate::solve::linear::matrix::DistMatrix,
-    pc: &mut LaggedPreconditioner,
+    pc_of: &crate::linalg::matrix::DistMatrix,
+    pc: &mut Preconditioning,
     b: &[f64],
     x: &mut [f64],
     lin: &GmresOptions,
-    kind: PcKind,
     st: &mut SolveStats,
 ) -> Result<Option<GmresStats>> {
     let t = Instant::now();
     let x0 = x.to_vec();
-    let factored = kind != PcKind::None;
+    let factored = pc.is_factored();
     let mut fresh = false;
     let out = loop {
         if factored {
-            match pc.update(comm, pc_of, kind) {
+            match pc.update(comm, pc_of) {
                 Ok(f) => {
                     fresh |= f;
                     st.factorizations += f as usize;
@@ -263,11 +262,7 @@ pub fn precond_solve(
                 }
             }
         }
-        let prec: &dyn Preconditioner = match (factored, pc.get()) {
-            (true, Some(p)) => p,
-            _ => &Identity,
-        };
-        let gs = gmres(comm, a, prec, b, x, lin)?;
+        let gs = gmres(comm, a, pc.get(), b, x, lin)?;
         st.linear_iterations += gs.iterations;
         if gs.converged {
             break Some(gs);
@@ -387,7 +382,7 @@ mod tests {
             increment_rtol: 1e-6,
             energy_rtol: 1e-8,
             linear: GmresOptions::default(),
-            preconditioner: PcKind::BlockJacobi,
+            preconditioner: crate::linalg::PcKind::BlockJacobi,
             pc_lag: 0,
             bfgs_reform: 11,
             fd_delta: 1e-4,

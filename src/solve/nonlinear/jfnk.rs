@@ -15,12 +15,12 @@
 //!   the right-hand side is itself one finite-difference product.
 
 use super::common::{evaluate, take_step, Constraints, Eval, Monitor, Verdict};
+use super::Preconditioning;
 use super::{FdRule, NonlinearOptions, NonlinearProblem, SolveStats};
+use crate::linalg::gmres::{gmres, GmresOptions};
+use crate::linalg::matrix::DistMatrix;
+use crate::linalg::LinearOperator;
 use crate::parallel::Comm;
-use crate::solve::linear::gmres::{gmres, GmresOptions};
-use crate::solve::linear::lagged::LaggedPreconditioner;
-use crate::solve::linear::matrix::DistMatrix;
-use crate::solve::linear::{Identity, LinearOperator, PcKind, Preconditioner};
 use crate::{ErrorKind, Result};
 use std::time::Instant;
 
@@ -126,9 +126,8 @@ fn refresh_preconditioner(
     problem: &mut dyn NonlinearProblem,
     u: &[f64],
     k: &mut DistMatrix,
-    pc: &mut LaggedPreconditioner,
+    pc: &mut Preconditioning,
     cons: &Constraints,
-    opts: &NonlinearOptions,
     st: &mut SolveStats,
 ) -> Result<bool> {
     let t = Instant::now();
@@ -144,7 +143,7 @@ fn refresh_preconditioner(
     st.seconds_assembly += t.elapsed().as_secs_f64();
     let t = Instant::now();
     pc.invalidate();
-    let ok = match pc.update(comm, k, opts.preconditioner) {
+    let ok = match pc.update(comm, k) {
         Ok(f) => {
             st.factorizations += f as usize;
             true
@@ -167,14 +166,14 @@ pub fn jfnk(
     r: &mut [f64],
     prescribed: &[(usize, f64)],
     k: &mut DistMatrix,
-    pc: &mut LaggedPreconditioner,
+    pc: &mut Preconditioning,
     opts: &NonlinearOptions,
 ) -> Result<SolveStats> {
     let n = u.len();
     let mut st = SolveStats::default();
     let cons = Constraints::new(n, prescribed);
-    let factored = opts.preconditioner != PcKind::None;
-    if factored && !refresh_preconditioner(comm, problem, u, k, pc, &cons, opts, &mut st)? {
+    let factored = pc.is_factored();
+    if factored && !refresh_preconditioner(comm, problem, u, k, pc, &cons, &mut st)? {
         return Ok(st);
     }
     let mut du = vec![0.0; n];
@@ -267,7 +266,7 @@ fn direction(
     eta: f64,
     du: &mut [f64],
     k: &mut DistMatrix,
-    pc: &mut LaggedPreconditioner,
+    pc: &mut Preconditioning,
     opts: &NonlinearOptions,
     assembled: bool,
     st: &mut SolveStats,
@@ -308,10 +307,7 @@ fn direction(
         let attempts = if assembled { 1 } else { 2 };
         for attempt in 0..attempts {
             du.copy_from_slice(gapv);
-            let prec: &dyn Preconditioner = match (opts.preconditioner != PcKind::None, pc.get()) {
-                (true, Some(p)) => p,
-                _ => &Identity,
-            };
+            let prec = pc.get();
             let gs = if assembled {
                 let mut kop: &DistMatrix = k;
                 gmres(comm, &mut kop, prec, &rhs, du, &lin)?
@@ -322,9 +318,9 @@ fn direction(
             if gs.converged {
                 return Ok(true);
             }
-            if attempt == 0 && opts.preconditioner != PcKind::None && !assembled {
+            if attempt == 0 && pc.is_factored() && !assembled {
                 // GMRES stalled under the lagged factorization: refresh it at this point.
-                if !refresh_preconditioner(comm, op.problem, u, k, pc, cons, opts, st)? {
+                if !refresh_preconditioner(comm, op.problem, u, k, pc, cons, st)? {
                     return Ok(false);
                 }
                 continue;

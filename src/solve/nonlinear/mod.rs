@@ -6,13 +6,14 @@ pub mod bfgs;
 pub mod common;
 pub mod jfnk;
 pub mod newton;
+pub mod precond;
 
+use crate::linalg::gmres::GmresOptions;
+use crate::linalg::matrix::DistMatrix;
+use crate::linalg::PcKind;
 use crate::parallel::Comm;
-use crate::solve::linear::gmres::GmresOptions;
-use crate::solve::linear::lagged::LaggedPreconditioner;
-use crate::solve::linear::matrix::DistMatrix;
-use crate::solve::linear::PcKind;
 use crate::Result;
+pub use precond::Preconditioning;
 
 /// The three nonlinear solvers (DESIGN.md, "Nonlinear solvers").
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize, Default)]
@@ -58,7 +59,7 @@ pub enum FdRule {
 }
 
 /// Settings of a nonlinear solve (defaults documented in the deck, `[solver]`).
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub struct NonlinearOptions {
     pub kind: SolverKind,
     pub max_iterations: usize,
@@ -78,7 +79,8 @@ pub struct NonlinearOptions {
     /// JFNK: relative perturbation δ and the rule for ε.
     pub fd_delta: f64,
     pub fd_rule: FdRule,
-    /// A characteristic element length h (mean over the model) for the FD step.
+    /// A characteristic element length h (mean over the model) for the FD step; set
+    /// from the model at the start of a run.
     pub char_length: f64,
     /// Backtracking line search on ‖r_free‖ (all solvers).
     pub line_search: bool,
@@ -93,7 +95,7 @@ pub fn solve(
     r: &mut [f64],
     prescribed: &[(usize, f64)],
     k: &mut DistMatrix,
-    pc: &mut LaggedPreconditioner,
+    pc: &mut Preconditioning,
     opts: &NonlinearOptions,
 ) -> Result<SolveStats> {
     match opts.kind {

@@ -8,10 +8,10 @@
 //! linearised consistently instead of being forced into the first residual.
 
 use super::common::{evaluate, precond_solve, take_step, Constraints, Monitor, Verdict};
+use super::Preconditioning;
 use super::{NonlinearOptions, NonlinearProblem, SolveStats};
+use crate::linalg::matrix::DistMatrix;
 use crate::parallel::Comm;
-use crate::solve::linear::lagged::LaggedPreconditioner;
-use crate::solve::linear::matrix::DistMatrix;
 use crate::{ErrorKind, Result};
 use std::time::Instant;
 
@@ -26,7 +26,7 @@ pub fn newton(
     r: &mut [f64],
     prescribed: &[(usize, f64)],
     k: &mut DistMatrix,
-    pc: &mut LaggedPreconditioner,
+    pc: &mut Preconditioning,
     opts: &NonlinearOptions,
 ) -> Result<SolveStats> {
     let n = u.len();
@@ -84,7 +84,6 @@ pub fn newton(
             &rhs,
             &mut du,
             &opts.linear,
-            opts.preconditioner,
             &mut st,
         )?
         .is_none()

@@ -20,6 +20,7 @@ use crate::model::Model;
 use crate::parallel::Comm;
 use crate::solve::nonlinear::SolveStats;
 use crate::solve::stepping::{RunTotals, StepRecord};
+use crate::solve::Analysis;
 use crate::{Error, Result};
 use std::time::Instant;
 
@@ -28,8 +29,11 @@ pub const DEFAULT_DT_FACTOR: f64 = 0.9;
 
 /// The time step of an explicit run and the stable step it derives from. A deck `step`
 /// above the stable step is an input error naming `analysis.step`.
-pub fn explicit_time_step(comm: &dyn Comm, model: &Model) -> Result<(f64, StableStep)> {
-    let a = &model.local.settings.analysis;
+pub fn explicit_time_step(
+    comm: &dyn Comm,
+    model: &Model,
+    a: &Analysis,
+) -> Result<(f64, StableStep)> {
     let stable = model.stable_time_step(comm)?;
     if a.step > 0.0 {
         if a.step > stable.dt {
@@ -40,7 +44,7 @@ pub fn explicit_time_step(comm: &dyn Comm, model: &Model) -> Result<(f64, Stable
         }
         Ok((a.step, stable))
     } else {
-        Ok((a.dt_factor.unwrap_or(DEFAULT_DT_FACTOR) * stable.dt, stable))
+        Ok((a.dt_factor * stable.dt, stable))
     }
 }
 
@@ -50,33 +54,28 @@ pub fn run_explicit(
     comm: &dyn Comm,
     model: &mut Model,
     state: &mut DynState,
+    analysis: &Analysis,
     dt: f64,
     stable: &StableStep,
     on_step: &mut DynObserver,
 ) -> Result<RunTotals> {
-    let fixed = model.local.settings.analysis.step > 0.0;
-    let factor = model
-        .local
-        .settings
-        .analysis
-        .dt_factor
-        .unwrap_or(DEFAULT_DT_FACTOR);
+    let fixed = analysis.step > 0.0;
+    let factor = analysis.dt_factor;
     let mut dt = dt;
-    let end = model.local.settings.analysis.end_time;
-    let disp_sets = model.local.settings.output.displacements.clone();
+    let end = analysis.end_time;
     let m = model.lumped_mass(comm);
     let n = model.n_owned_dofs();
     let mut tot = RunTotals::default();
     let mut t0 = Instant::now();
     let mut is_c = vec![false; n];
-    for &(d, _) in &model.constrained_owned {
+    for (d, _) in model.prescribed(0.0) {
         is_c[d] = true;
     }
-    // Contact multipliers are not used: ALM walls act kinematically here.
-    for d in model.multiplier_range() {
+    // Algebraic unknowns are held: ALM walls act kinematically here.
+    for d in model.extra_range() {
         is_c[d] = true;
     }
-    model.contact.explicit = true;
+    model.start_explicit()?;
 
     let motion = prescribed_motion(model, 0.0, dt);
     state.u = vec![0.0; n];
@@ -117,9 +116,9 @@ pub fn run_explicit(
             retries: 0,
             reactions: model.reactions(comm, &react),
             wall_seconds: t0.elapsed().as_secs_f64(),
-            displacements: model.mean_displacements(comm, &state.u, &disp_sets),
+            displacements: model.mean_displacements(comm, &state.u),
             energies: Some(energy.current),
-            contact: model.contact_report(comm),
+            columns: model.column_values(comm, &state.u, 0.0),
         },
         state,
         model,
@@ -171,7 +170,7 @@ pub fn run_explicit(
         // Rigid walls enforced kinematically: a penetrating node is put back on the wall
         // and its approach velocity removed (the explicit reference, as LS-DYNA's
         // *RIGIDWALL in explicit).
-        model.contact_kinematic(&mut state.u, &mut state.v, m, t1, h);
+        model.kinematic(&mut state.u, &mut state.v, m, t1, h);
         let ta = Instant::now();
         if let Err(e) = model.forces(comm, &state.u, t1, &mut fi, &mut fe) {
             tot.seconds_assembly += ta.elapsed().as_secs_f64();
@@ -203,9 +202,9 @@ pub fn run_explicit(
             retries: 0,
             reactions: model.reactions(comm, &react),
             wall_seconds: t0.elapsed().as_secs_f64(),
-            displacements: model.mean_displacements(comm, &state.u, &disp_sets),
+            displacements: model.mean_displacements(comm, &state.u),
             energies: Some(en),
-            contact: model.contact_report(comm),
+            columns: model.column_values(comm, &state.u, t1),
         };
         on_step(&rec, state, model)?;
         t = t1;

@@ -5,9 +5,8 @@
 //! unchanged. Prescribed dofs take u(t_{n+1}) from their constraints; their velocity
 //! and acceleration follow from the Newmark relations like every other dof's.
 //!
-//! A step that does not converge is retried from the last converged state with half
-//! the time step, and the step grows back by 1.5 (up to `max_step`) after easy steps,
-//! as in static stepping ([`StepControl`]).
+//! The time step comes from the step controller shared with static stepping
+//! ([`StepControl`]): halved on failure, grown back after easy steps.
 
 // Index loops over several dof vectors at once read like the formulas.
 #![allow(clippy::needless_range_loop)]
@@ -15,25 +14,25 @@
 use super::alpha::AlphaParams;
 use super::energy::EnergyAccount;
 use super::{momentum, prescribed_motion, support_forces, DynObserver, DynState};
+use crate::linalg::matrix::DistMatrix;
 use crate::model::dynamics::MassMatrix;
 use crate::model::Model;
 use crate::parallel::Comm;
-use crate::scene::deck::{MassKind, SchemeKind};
-use crate::solve::linear::lagged::LaggedBlockJacobi;
-use crate::solve::linear::matrix::DistMatrix;
-use crate::solve::nonlinear::{solve, NonlinearOptions, NonlinearProblem, SolveStats};
-use crate::solve::stepping::{RunTotals, StepControl, StepRecord};
+use crate::solve::control::StepControl;
+use crate::solve::nonlinear::{solve, NonlinearOptions, NonlinearProblem, Preconditioning};
+use crate::solve::stepping::{RunTotals, StepRecord};
+use crate::solve::{Analysis, MassKind, Scheme};
 use crate::{Error, Result};
 use std::time::Instant;
 
-/// The scheme's parameters from the deck (default generalized-α with ρ∞ = 0.9).
-pub fn params_from_deck(a: &crate::scene::deck::AnalysisDeck) -> AlphaParams {
-    let rho = a.rho_inf.unwrap_or(0.9);
-    match a.scheme.unwrap_or(SchemeKind::GeneralizedAlpha) {
-        SchemeKind::Newmark => AlphaParams::newmark(),
-        SchemeKind::GeneralizedAlpha => AlphaParams::generalized_alpha(rho),
-        SchemeKind::HhtAlpha => AlphaParams::hht(rho),
-        SchemeKind::Bossak => AlphaParams::bossak(rho),
+/// The scheme's parameters.
+pub fn scheme_params(a: &Analysis) -> AlphaParams {
+    let rho = a.rho_inf;
+    match a.scheme {
+        Scheme::Newmark => AlphaParams::newmark(),
+        Scheme::GeneralizedAlpha => AlphaParams::generalized_alpha(rho),
+        Scheme::HhtAlpha => AlphaParams::hht(rho),
+        Scheme::Bossak => AlphaParams::bossak(rho),
     }
 }
 
@@ -107,27 +106,12 @@ impl NonlinearProblem for MassProblem<'_> {
     }
 }
 
-/// The mass operator a deck asks for.
-pub fn mass_from_deck(comm: &dyn Comm, model: &Model) -> MassMatrix {
-    match model
-        .local
-        .settings
-        .analysis
-        .mass
-        .unwrap_or(MassKind::Consistent)
-    {
+/// The mass operator the analysis asks for.
+pub fn mass_operator(comm: &dyn Comm, model: &Model, kind: MassKind) -> MassMatrix {
+    match kind {
         MassKind::Consistent => MassMatrix::Consistent,
         MassKind::Lumped => MassMatrix::Lumped(model.lumped_mass(comm)),
     }
-}
-
-fn add_stats(tot: &mut RunTotals, s: &SolveStats) {
-    tot.nonlinear_iterations += s.iterations;
-    tot.linear_iterations += s.linear_iterations;
-    tot.residual_evaluations += s.residual_evaluations;
-    tot.factorizations += s.factorizations;
-    tot.seconds_assembly += s.seconds_assembly;
-    tot.seconds_linear += s.seconds_linear;
 }
 
 /// Run implicit dynamics from rest (plus the deck's initial velocities); `on_step`
@@ -136,23 +120,22 @@ pub fn run_implicit(
     comm: &dyn Comm,
     model: &mut Model,
     state: &mut DynState,
+    analysis: &Analysis,
     opts: &NonlinearOptions,
     on_step: &mut DynObserver,
 ) -> Result<RunTotals> {
-    let a = model.local.settings.analysis.clone();
-    let p = params_from_deck(&a);
-    let ctl = StepControl::from_analysis(&a, opts.max_iterations);
-    let disp_sets = model.local.settings.output.displacements.clone();
-    let mass = mass_from_deck(comm, model);
+    let p = scheme_params(analysis);
+    let mut ctl = StepControl::new(analysis, opts.max_iterations);
+    let mass = mass_operator(comm, model, analysis.mass);
     let n = model.n_owned_dofs();
     let mut k = model.new_matrix(comm);
-    let mut pc = LaggedBlockJacobi::new(opts.pc_lag);
+    let mut pc = Preconditioning::new(opts.preconditioner, opts.pc_lag);
     let mut tot = RunTotals::default();
     let t_start = Instant::now();
 
     // Initial state: u = g(0) on prescribed dofs, v from the deck (ġ(0) on prescribed
     // dofs), a from M a = f_ext − f_int on the free dofs (g̈(0) on prescribed ones).
-    let h = 1e-6 * ctl.step;
+    let h = 1e-6 * analysis.step;
     let motion = prescribed_motion(model, 0.0, h);
     state.u = vec![0.0; n];
     state.v = model.initial_velocity();
@@ -165,8 +148,9 @@ pub fn run_implicit(
     model.forces(comm, &state.u, 0.0, &mut fi, &mut fe)?;
     let rhs: Vec<f64> = (0..n).map(|i| fe[i] - fi[i]).collect();
     state.a = vec![0.0; n];
-    // Contact multipliers carry no mass: their "acceleration" is held at zero.
-    let mults = model.multiplier_range();
+    // Multipliers and reference points carry no mass: their "acceleration" is held at
+    // zero.
+    let mults = model.extra_range();
     let mut a_pres: Vec<(usize, f64)> = motion.iter().map(|m| (m.0, m.3)).collect();
     a_pres.extend(mults.clone().map(|d| (d, 0.0)));
     let mut r = vec![0.0; n];
@@ -187,7 +171,7 @@ pub fn run_implicit(
             opts,
         )?
     };
-    add_stats(&mut tot, &st0);
+    tot.add(&st0);
     pc.invalidate();
     if !st0.converged {
         return Err(Error::runtime(format!(
@@ -208,32 +192,24 @@ pub fn run_implicit(
             retries: 0,
             reactions: model.reactions(comm, &react),
             wall_seconds: t_start.elapsed().as_secs_f64(),
-            displacements: model.mean_displacements(comm, &state.u, &disp_sets),
+            displacements: model.mean_displacements(comm, &state.u),
             energies: Some(energy.current),
-            contact: model.contact_report(comm),
+            columns: model.column_values(comm, &state.u, 0.0),
         },
         state,
         model,
     )?;
 
-    let end = a.end_time;
-    let mut t_done = 0.0;
-    let mut dt = ctl.step.min(ctl.max_step);
-    let mut step = 0;
-    let mut retries = 0;
-    let mut t0 = Instant::now();
     let mut trial = vec![0.0; n];
-    while t_done < end * (1.0 - 1e-12) {
-        let mut t1 = t_done + dt;
-        if t1 > end * (1.0 - 1e-9) || end - t1 < 1e-3 * dt {
-            t1 = end;
-        }
+    let mut t0 = Instant::now();
+    while let Some((t_done, t1)) = ctl.next() {
         let h = t1 - t_done;
         let g1 = model.prescribed(t1);
         for i in 0..n {
             trial[i] = p.predict(h, state.u[i], state.v[i], state.a[i]);
         }
-        // Multipliers start from their last values (they are not integrated in time).
+        // Algebraic unknowns (multipliers, reference points) start from their last values
+        // (they are not integrated in time).
         for i in mults.clone() {
             trial[i] = state.u[i];
         }
@@ -254,20 +230,13 @@ pub fn run_implicit(
                 comm, &mut prob, &mut trial, &mut r, &g1, &mut k, &mut pc, opts,
             )?
         };
-        add_stats(&mut tot, &stats);
+        tot.add(&stats);
         if !stats.converged {
-            dt = 0.5 * h;
             pc.invalidate();
-            if dt < ctl.min_step {
-                tot.failure = Some(format!(
-                    "step {} (t = {t1}) did not converge: {}; the time step was cut {retries} time(s) to {h:.3e}, the minimum is {:.3e}",
-                    step + 1,
-                    stats.reason,
-                    ctl.min_step
-                ));
+            if let Err(why) = ctl.reject(t1, &stats.reason, "time step") {
+                tot.failure = Some(why);
                 return Ok(tot);
             }
-            retries += 1;
             tot.retries += 1;
             continue;
         }
@@ -290,7 +259,7 @@ pub fn run_implicit(
         // Persistency: a node pressed against a wall moves with it along the normal. The
         // Newmark update alone gives a node stopped within one step the reverse of its
         // approach velocity, and the Taylor bar's foot bounced off the wall.
-        model.contact_persistency(&mut v1, &mut a1, t1, h);
+        model.persistency(&mut v1, &mut a1, t1, h);
         model.commit();
         let (react, g) = support_forces(comm, model, &mass, &a1, &fi, &fe);
         let mv = momentum(comm, model, &mass, &v1);
@@ -301,9 +270,8 @@ pub fn run_implicit(
         state.u.copy_from_slice(&trial);
         state.v = v1;
         state.a = a1;
-        step += 1;
+        let (step, retries) = ctl.accept(t1, stats.iterations);
         tot.steps += 1;
-        let easy = stats.iterations <= ctl.easy_iterations;
         let rec = StepRecord {
             step,
             time: t1,
@@ -311,16 +279,11 @@ pub fn run_implicit(
             stats,
             retries,
             wall_seconds: t0.elapsed().as_secs_f64(),
-            displacements: model.mean_displacements(comm, &state.u, &disp_sets),
+            displacements: model.mean_displacements(comm, &state.u),
             energies: Some(en),
-            contact: model.contact_report(comm),
+            columns: model.column_values(comm, &state.u, t1),
         };
         on_step(&rec, state, model)?;
-        if easy && retries == 0 {
-            dt = (dt * ctl.growth).min(ctl.max_step);
-        }
-        t_done = t1;
-        retries = 0;
         t0 = Instant::now();
     }
     tot.converged = true;

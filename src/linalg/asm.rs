@@ -225,6 +225,9 @@ impl RestrictedSchwarz {
 }
 
 impl Preconditioner for RestrictedSchwarz {
+    fn setup(&mut self, comm: &dyn Comm, k: &DistMatrix) -> crate::Result<()> {
+        self.refactor(comm, k)
+    }
     fn apply(&self, comm: &dyn Comm, r: &[f64], z: &mut [f64]) {
         let n = 3 * self.n_own;
         let mut w = vec![0.0; n + 3 * self.n_ghost];
@@ -238,10 +241,10 @@ impl Preconditioner for RestrictedSchwarz {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::linalg::block_jacobi::tests::elasticity_cube;
+    use crate::linalg::matrix::tests::Lcg;
+    use crate::linalg::{gmres, BlockJacobi, GmresOptions};
     use crate::parallel::{run_ranks, SerialComm};
-    use crate::solve::linear::block_jacobi::tests::elasticity_cube;
-    use crate::solve::linear::matrix::tests::Lcg;
-    use crate::solve::linear::{gmres, BlockJacobi, GmresOptions};
 
     fn split(n: usize, p: usize) -> Vec<usize> {
         (0..p).map(|r| n * (r + 1) / p - n * r / p).collect()

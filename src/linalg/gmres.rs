@@ -20,7 +20,7 @@ use crate::parallel::Comm;
 use crate::Error;
 use std::time::Instant;
 
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct GmresOptions {
     /// Relative tolerance on the true residual: ‖b − A x‖ ≤ rtol·‖b‖.
     pub rtol: f64,
@@ -321,8 +321,8 @@ fn subtract_combination(w: &mut [f64], basis: &[f64], c: &[f64], n: usize) {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::linalg::{BlockJacobi, DistMatrix, Factorization, Identity};
     use crate::parallel::{run_ranks, Layout, SerialComm};
-    use crate::solve::linear::{BlockJacobi, DistMatrix, Factorization, Identity};
 
     /// 3D grid of `nx·ny·nz` blocks, 7-point stencil: A = L ⊗ K + shift·I, assembled from
     /// 2-node edge elements [[K, −K], [−K, K]] (elements assigned by the owner of the

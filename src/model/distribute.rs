@@ -1,66 +1,49 @@
-//! Split a [`ModelDef`] into per-rank [`LocalModel`]s (on rank 0) and send each rank its
-//! piece. Nodes are renumbered rank by rank so that every rank owns one contiguous
-//! range of global node numbers; elements likewise (DESIGN.md, "Distributed conventions").
+//! Split a [`ModelDef`] into per-rank [`LocalModel`]s (on rank 0, from an element
+//! partition) and send each rank its piece. Nodes are renumbered rank by rank so that
+//! every rank owns one contiguous range of global node numbers; elements likewise
+//! (DESIGN.md, "Distributed conventions"). A rank's ghost nodes are those of its
+//! elements and of the contribution stencils it evaluates; each contribution
+//! definition localizes itself ([`super::def::ContributionKind::localize`]).
 
-use super::node_owner;
+use super::def::{Constraint, ContributionDef, Localizer, MaterialDef, ModelDef};
+use crate::fem::element::Formulation;
 use crate::mesh::ElemKind;
-use crate::model::def::{Constraint, Load, MaterialDef, ModelDef, Settings};
 use crate::parallel::Comm;
+use crate::partition::node_owner;
 use crate::{Error, Result};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 
-/// What one rank knows of the model.
-#[derive(Debug, Clone, Serialize, Deserialize)]
-pub struct LocalModel {
+/// What one rank knows of the mesh: its nodes (owned, then ghosts) and sets.
+#[derive(Debug, Clone, Default, Serialize, Deserialize)]
+pub struct LocalMesh {
     pub rank: usize,
     pub ranks: usize,
     /// Owned node count of every rank (gives the node [`crate::parallel::Layout`]).
     pub owned_nodes_per_rank: Vec<usize>,
     /// Element count of every rank (elements are numbered rank by rank too).
     pub elems_per_rank: Vec<usize>,
-    /// Global numbers of the ghost nodes (touched by our elements, owned elsewhere), sorted.
+    /// Global numbers of the ghost nodes (owned elsewhere, touched by this rank's
+    /// elements or stencils), sorted.
     pub ghosts: Vec<usize>,
     /// Reference coordinates of local nodes: owned first, then ghosts.
     pub coords: Vec<[f64; 3]>,
     /// Node number in the user's mesh, for each owned node.
     pub orig_node: Vec<u64>,
-    pub kinds: Vec<ElemKind>,
-    pub offsets: Vec<usize>,
-    /// Element connectivity in local node indices.
-    pub conn: Vec<usize>,
-    pub elem_material: Vec<u32>,
-    /// Hex8 volume treatment of each local element.
-    pub elem_formulation: Vec<crate::fem::element::Formulation>,
-    /// Element number in the user's mesh, for each local element.
-    pub orig_elem: Vec<u64>,
     /// Named node sets restricted to local nodes (owned and ghost), local indices.
     pub node_sets: BTreeMap<String, Vec<usize>>,
     /// Named surfaces restricted to local elements: (local element, face).
     pub surfaces: BTreeMap<String, Vec<(usize, u8)>>,
-    pub materials: Vec<(String, MaterialDef)>,
-    pub constraints: Vec<Constraint>,
-    pub loads: Vec<Load>,
-    pub reaction_sets: Vec<String>,
-    /// Rigid walls with this rank's owned tracked nodes (local indices).
-    pub walls: Vec<crate::contact::wall::WallDef>,
-    pub settings: Settings,
     pub n_nodes_global: usize,
     pub n_elems_global: usize,
 }
 
-impl LocalModel {
+impl LocalMesh {
     pub fn n_owned(&self) -> usize {
         self.owned_nodes_per_rank[self.rank]
     }
     pub fn n_local_nodes(&self) -> usize {
         self.coords.len()
-    }
-    pub fn n_elems(&self) -> usize {
-        self.kinds.len()
-    }
-    pub fn elem_nodes(&self, e: usize) -> &[usize] {
-        &self.conn[self.offsets[e]..self.offsets[e + 1]]
     }
     pub fn node_start(&self) -> usize {
         self.owned_nodes_per_rank[..self.rank].iter().sum()
@@ -76,6 +59,62 @@ impl LocalModel {
             self.ghosts[local - self.n_owned()]
         }
     }
+    /// The local nodes of a node set (empty if the set has none here).
+    pub fn set(&self, name: &str) -> &[usize] {
+        self.node_sets
+            .get(name)
+            .map(|v| v.as_slice())
+            .unwrap_or(&[])
+    }
+}
+
+/// This rank's elements (local node indices).
+#[derive(Debug, Clone, Default, Serialize, Deserialize)]
+pub struct LocalElements {
+    pub kinds: Vec<ElemKind>,
+    /// Element e's nodes are `conn[offsets[e]..offsets[e + 1]]`.
+    pub offsets: Vec<usize>,
+    pub conn: Vec<usize>,
+    /// Material index and hex8 volume treatment of each element.
+    pub material: Vec<u32>,
+    pub formulation: Vec<Formulation>,
+    /// Element number in the user's mesh.
+    pub orig: Vec<u64>,
+}
+
+impl LocalElements {
+    pub fn len(&self) -> usize {
+        self.kinds.len()
+    }
+    pub fn is_empty(&self) -> bool {
+        self.kinds.is_empty()
+    }
+    pub fn nodes(&self, e: usize) -> &[usize] {
+        &self.conn[self.offsets[e]..self.offsets[e + 1]]
+    }
+    /// The local nodes of face `face` of element `e`, outward normal by the right hand.
+    pub fn face_nodes(&self, e: usize, face: u8) -> Vec<usize> {
+        let en = self.nodes(e);
+        self.kinds[e].faces()[face as usize]
+            .iter()
+            .map(|&i| en[i])
+            .collect()
+    }
+}
+
+/// What one rank knows of the model.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct LocalModel {
+    pub mesh: LocalMesh,
+    pub elements: LocalElements,
+    pub materials: Vec<(String, MaterialDef)>,
+    pub constraints: Vec<Constraint>,
+    pub reaction_sets: Vec<String>,
+    pub displacement_sets: Vec<String>,
+    pub initial_velocity: Vec<(String, [f64; 3])>,
+    /// Every contribution definition, localized to this rank (the same list, in the same
+    /// order, on every rank).
+    pub contributions: Vec<ContributionDef>,
 }
 
 /// Build every rank's piece from the whole model and an element partition.
@@ -105,6 +144,15 @@ pub fn split(def: &ModelDef, part: &[u32], ranks: usize) -> Vec<LocalModel> {
         elems_of[p as usize].push(e);
     }
     let elems_per_rank: Vec<usize> = elems_of.iter().map(|v| v.len()).collect();
+    // Stencils evaluated on each rank (on the owner of their first node).
+    let mut stencil_nodes: Vec<Vec<usize>> = vec![Vec::new(); ranks];
+    for c in &def.contributions {
+        for s in c.kind().stencils() {
+            if let Some(&first) = s.first() {
+                stencil_nodes[owner[first] as usize].extend(s);
+            }
+        }
+    }
 
     let mut out = Vec::with_capacity(ranks);
     let mut local_of = vec![usize::MAX; mesh.n_nodes()];
@@ -112,15 +160,14 @@ pub fn split(def: &ModelDef, part: &[u32], ranks: usize) -> Vec<LocalModel> {
         // Local nodes: owned (in new-number order) then ghosts (sorted by new number).
         let mut owned: Vec<usize> = Vec::with_capacity(owned_nodes_per_rank[r]);
         let mut ghosts: Vec<usize> = Vec::new();
-        for &e in &elems_of[r] {
-            for &n in mesh.elem_nodes(e) {
-                if local_of[n] == usize::MAX {
-                    local_of[n] = 0; // mark seen
-                    if owner[n] as usize == r {
-                        owned.push(n);
-                    } else {
-                        ghosts.push(n);
-                    }
+        let elem_nodes = elems_of[r].iter().flat_map(|&e| mesh.elem_nodes(e));
+        for &n in elem_nodes.chain(&stencil_nodes[r]) {
+            if local_of[n] == usize::MAX {
+                local_of[n] = 0; // mark seen
+                if owner[n] as usize == r {
+                    owned.push(n);
+                } else {
+                    ghosts.push(n);
                 }
             }
         }
@@ -135,18 +182,20 @@ pub fn split(def: &ModelDef, part: &[u32], ranks: usize) -> Vec<LocalModel> {
             .chain(ghosts.iter())
             .map(|&n| mesh.coords[n])
             .collect();
-        let mut kinds = Vec::with_capacity(elems_of[r].len());
-        let mut offsets = vec![0usize];
-        let mut conn = Vec::new();
-        let mut elem_material = Vec::new();
-        let mut elem_formulation = Vec::new();
+        let mut elements = LocalElements {
+            offsets: vec![0],
+            ..Default::default()
+        };
         let mut local_elem = BTreeMap::new();
         for (le, &e) in elems_of[r].iter().enumerate() {
-            kinds.push(mesh.kinds[e]);
-            conn.extend(mesh.elem_nodes(e).iter().map(|&n| local_of[n]));
-            offsets.push(conn.len());
-            elem_material.push(def.elem_material(e) as u32);
-            elem_formulation.push(def.elem_formulation(e));
+            elements.kinds.push(mesh.kinds[e]);
+            elements
+                .conn
+                .extend(mesh.elem_nodes(e).iter().map(|&n| local_of[n]));
+            elements.offsets.push(elements.conn.len());
+            elements.material.push(def.elem_material(e) as u32);
+            elements.formulation.push(def.elem_formulation(e));
+            elements.orig.push(e as u64);
             local_elem.insert(e, le);
         }
         let node_sets = def
@@ -174,53 +223,38 @@ pub fn split(def: &ModelDef, part: &[u32], ranks: usize) -> Vec<LocalModel> {
                 )
             })
             .collect();
-        // Walls: each rank tracks the nodes it owns (contact forces act on the node only).
-        let walls = def
-            .walls
-            .iter()
-            .map(|w| {
-                let mut lw = w.clone();
-                lw.nodes.clear();
-                lw.areas.clear();
-                let mut mine: Vec<(usize, f64)> = w
-                    .nodes
-                    .iter()
-                    .zip(&w.areas)
-                    .filter(|(&n, _)| owner[n] as usize == r)
-                    .map(|(&n, &a)| (local_of[n], a))
-                    .collect();
-                mine.sort_by_key(|p| p.0);
-                for (n, a) in mine {
-                    lw.nodes.push(n);
-                    lw.areas.push(a);
-                }
-                lw
-            })
-            .collect();
-        out.push(LocalModel {
+        let loc = Localizer {
             rank: r,
             ranks,
-            owned_nodes_per_rank: owned_nodes_per_rank.clone(),
-            elems_per_rank: elems_per_rank.clone(),
-            ghosts: ghosts.iter().map(|&n| new_id[n]).collect(),
-            coords,
-            orig_node: owned.iter().map(|&n| n as u64).collect(),
-            kinds,
-            offsets,
-            conn,
-            elem_material,
-            elem_formulation,
-            orig_elem: elems_of[r].iter().map(|&e| e as u64).collect(),
-            node_sets,
-            surfaces,
+            owner: &owner,
+            local_of: &local_of,
+        };
+        let contributions = def
+            .contributions
+            .iter()
+            .map(|c| c.kind().localize(&loc))
+            .collect();
+        out.push(LocalModel {
+            mesh: LocalMesh {
+                rank: r,
+                ranks,
+                owned_nodes_per_rank: owned_nodes_per_rank.clone(),
+                elems_per_rank: elems_per_rank.clone(),
+                ghosts: ghosts.iter().map(|&n| new_id[n]).collect(),
+                coords,
+                orig_node: owned.iter().map(|&n| n as u64).collect(),
+                node_sets,
+                surfaces,
+                n_nodes_global: mesh.n_nodes(),
+                n_elems_global: mesh.n_elems(),
+            },
+            elements,
             materials: def.materials.clone(),
             constraints: def.constraints.clone(),
-            loads: def.loads.clone(),
             reaction_sets: def.reaction_sets.clone(),
-            walls,
-            settings: def.settings.clone(),
-            n_nodes_global: mesh.n_nodes(),
-            n_elems_global: mesh.n_elems(),
+            displacement_sets: def.displacement_sets.clone(),
+            initial_velocity: def.initial_velocity.clone(),
+            contributions,
         });
         for &n in owned.iter().chain(ghosts.iter()) {
             local_of[n] = usize::MAX;

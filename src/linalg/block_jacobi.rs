@@ -624,6 +624,9 @@ fn permuted_pattern(
 }
 
 impl Preconditioner for BlockJacobi {
+    fn setup(&mut self, _comm: &dyn Comm, k: &DistMatrix) -> crate::Result<()> {
+        self.refactor(k)
+    }
     fn apply(&self, _comm: &dyn Comm, r: &[f64], z: &mut [f64]) {
         z.copy_from_slice(r);
         self.f.solve_in_place(z);
@@ -633,8 +636,8 @@ impl Preconditioner for BlockJacobi {
 #[cfg(test)]
 pub(crate) mod tests {
     use super::*;
+    use crate::linalg::matrix::tests::Lcg;
     use crate::parallel::{Comm, Layout, SerialComm};
-    use crate::solve::linear::matrix::tests::Lcg;
 
     /// A small 1-rank block tridiagonal matrix with random non-symmetric blocks and a
     /// dominant diagonal.
@@ -964,8 +967,8 @@ pub(crate) mod tests {
     #[test]
     #[ignore]
     fn timing_elasticity_100k() {
+        use crate::linalg::{gmres, GmresOptions};
         use crate::parallel::run_ranks;
-        use crate::solve::linear::{gmres, GmresOptions};
         faer::set_global_parallelism(faer::Par::Seq);
         let ne: usize = std::env::var("ALFE_TIMING_NE")
             .ok()

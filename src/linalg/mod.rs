@@ -1,0 +1,154 @@
+//! Distributed sparse linear algebra: block-sparse matrix, GMRES, block Jacobi and
+//! restricted additive Schwarz preconditioners. It knows the parallel layer, no physics.
+//!
+//! Vectors are distributed by their owned parts (the scalar slice of the rank's
+//! contiguous range). The seams are [`LinearOperator`] (an assembled matrix, or a
+//! matrix-free Jacobian product that evaluates a residual and may fail) and
+//! [`Preconditioner`] (block Jacobi is local; restricted additive Schwarz does one halo
+//! exchange per application).
+
+pub mod asm;
+pub mod block_jacobi;
+pub mod gmres;
+pub mod matrix;
+pub mod ordering;
+
+pub use asm::RestrictedSchwarz;
+pub use block_jacobi::{BlockJacobi, Factorization, FillOrdering, LocalBlockPattern, LocalFactor};
+pub use gmres::{gmres, GmresOptions, GmresStats};
+
+pub use matrix::DistMatrix;
+
+use crate::parallel::Comm;
+
+/// y = A x for distributed vectors given by their owned parts.
+///
+/// Collective. An implementation that can fail (e.g. a matrix-free product whose
+/// residual evaluation meets an inverted element) must agree on failure across ranks
+/// (e.g. with [`Comm::all_ok`]) so that every rank returns `Err` together.
+pub trait LinearOperator {
+    fn apply(&mut self, comm: &dyn Comm, x: &[f64], y: &mut [f64]) -> crate::Result<()>;
+}
+
+impl LinearOperator for DistMatrix {
+    fn apply(&mut self, comm: &dyn Comm, x: &[f64], y: &mut [f64]) -> crate::Result<()> {
+        self.spmv(comm, x, y);
+        Ok(())
+    }
+}
+
+impl LinearOperator for &DistMatrix {
+    fn apply(&mut self, comm: &dyn Comm, x: &[f64], y: &mut [f64]) -> crate::Result<()> {
+        self.spmv(comm, x, y);
+        Ok(())
+    }
+}
+
+/// A preconditioner: set up on an assembled matrix, then applied in the Krylov solves
+/// (z ≈ A⁻¹ r). Created by name ([`preconditioner`]) before there is a matrix; the first
+/// [`Preconditioner::setup`] of a factored one does the symbolic work (ordering,
+/// elimination structure), later ones only refactor numerically for new values of the
+/// same pattern (faer's symbolic/numeric split). When to set up again (every Newton
+/// iteration, or lagged) is the nonlinear solver's policy, not the preconditioner's.
+///
+/// Collective: every rank sets up and applies together (an implementation may
+/// communicate, e.g. [`RestrictedSchwarz`] gathers its overlap). A failed setup is
+/// returned on the ranks where it failed; callers agree on it with [`Comm::all_ok`].
+pub trait Preconditioner {
+    /// Factor (or refactor) for the matrix `k`.
+    fn setup(&mut self, comm: &dyn Comm, k: &DistMatrix) -> crate::Result<()>;
+    /// z = M⁻¹ r on owned parts.
+    fn apply(&self, comm: &dyn Comm, r: &[f64], z: &mut [f64]);
+    /// Whether `setup` factors a matrix (worth lagging, counted as a factorization);
+    /// false for the identity.
+    fn is_factored(&self) -> bool {
+        true
+    }
+}
+
+/// Which preconditioner the Krylov solves use (deck `[solver.linear] preconditioner`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum PcKind {
+    /// Block Jacobi ([`BlockJacobi`]): each rank's diagonal block factored exactly.
+    #[default]
+    BlockJacobi,
+    /// Restricted additive Schwarz with one layer of overlap (the ghost nodes,
+    /// [`RestrictedSchwarz`]).
+    Asm,
+    /// None: z = r.
+    None,
+}
+
+impl PcKind {
+    pub fn name(self) -> &'static str {
+        match self {
+            PcKind::BlockJacobi => "block-jacobi",
+            PcKind::Asm => "asm",
+            PcKind::None => "none",
+        }
+    }
+}
+
+/// A preconditioner of the given kind, to be set up on a matrix.
+pub fn preconditioner(kind: PcKind) -> Box<dyn Preconditioner> {
+    match kind {
+        PcKind::BlockJacobi => Box::new(OnFirstSetup::<BlockJacobi>(None)),
+        PcKind::Asm => Box::new(OnFirstSetup::<RestrictedSchwarz>(None)),
+        PcKind::None => Box::new(Identity),
+    }
+}
+
+/// A factored preconditioner built from its first matrix.
+trait Build: Preconditioner + Sized {
+    fn build(comm: &dyn Comm, k: &DistMatrix) -> crate::Result<Self>;
+}
+
+impl Build for BlockJacobi {
+    fn build(_comm: &dyn Comm, k: &DistMatrix) -> crate::Result<Self> {
+        BlockJacobi::new(k)
+    }
+}
+
+impl Build for RestrictedSchwarz {
+    fn build(comm: &dyn Comm, k: &DistMatrix) -> crate::Result<Self> {
+        RestrictedSchwarz::new(comm, k)
+    }
+}
+
+/// Built (symbolic and numeric) at the first setup, refactored at the next ones.
+struct OnFirstSetup<P>(Option<P>);
+
+impl<P: Build> Preconditioner for OnFirstSetup<P> {
+    fn setup(&mut self, comm: &dyn Comm, k: &DistMatrix) -> crate::Result<()> {
+        match &mut self.0 {
+            Some(p) => p.setup(comm, k),
+            None => {
+                self.0 = Some(P::build(comm, k)?);
+                Ok(())
+            }
+        }
+    }
+    fn apply(&self, comm: &dyn Comm, r: &[f64], z: &mut [f64]) {
+        match &self.0 {
+            Some(p) => p.apply(comm, r, z),
+            None => z.copy_from_slice(r),
+        }
+    }
+}
+
+/// No preconditioning: z = r.
+#[derive(Debug, Default, Clone, Copy)]
+pub struct Identity;
+
+impl Preconditioner for Identity {
+    fn setup(&mut self, _comm: &dyn Comm, _k: &DistMatrix) -> crate::Result<()> {
+        Ok(())
+    }
+    fn apply(&self, _comm: &dyn Comm, r: &[f64], z: &mut [f64]) {
+        z.copy_from_slice(r);
+    }
+    fn is_factored(&self) -> bool {
+        false
+    }
+}

@@ -1,0 +1,263 @@
+//! The seam of the model: a [`Contribution`] is one piece of the discrete problem on one
+//! rank — the solid elements, a load, a rigid wall, a distributing coupling — and the
+//! model is the list of them (MFEM: a form is a list of integrators). Each one
+//!
+//! * **declares** the unknowns it adds ([`Unknowns`]: per-node multipliers it owns, or
+//!   global unknowns such as a reference point's six DOFs owned by one rank) and, through
+//!   its definition's stencils (`def.rs`), the node couplings that partitioning and the
+//!   ghost sets follow; after the unknown map is built it is told where its unknowns
+//!   are ([`Contribution::bind`]) and lists the matrix blocks it will fill
+//!   ([`Contribution::pattern`]);
+//! * **evaluates** its residual (and, on request, its generalized Jacobian) from local
+//!   data only ([`Evaluation`]): it adds into local vectors that hold owned and ghost
+//!   blocks, and the model sums all ghost entries on their owners once, after every
+//!   contribution has been evaluated. Physics never touches MPI;
+//! * **commits** its state when a step has converged;
+//! * **publishes** history columns (reduced over ranks by the model), nodal or element
+//!   fields and moving geometry for the HDF5/XDMF output, and a summary entry.
+//!
+//! # Adding a kind of contribution
+//!
+//! One module under `model/` and one deck section under `scene/`; the distributing
+//! coupling (`model/coupling.rs`, `scene/coupling.rs`) is the worked example:
+//!
+//! 1. **Definition** (serial, global node numbers): a serde type with what the deck says
+//!    (`CouplingDef`: the coupled nodes and weights, the reference point, its DOFs'
+//!    curves). Register it as a variant of [`super::def::ContributionDef`] and give it
+//!    `localize` (this rank's share, local node indices: the coupling keeps the coupled
+//!    nodes the rank owns, and every rank agrees on which rank owns the reference point),
+//!    `stencils` (nodes that must sit on one rank: none for the coupling, whose nodes
+//!    reach it through its global unknowns) and `build`.
+//! 2. **Runtime**: a struct implementing [`Contribution`]. The coupling declares two
+//!    global blocks for the reference point and two for its constraint multipliers,
+//!    owned by the rank with most of the coupled weight and read by every rank with
+//!    coupled nodes; `evaluate` adds κ Cᵢᵀλ to its nodes' rows and κ Cᵢ uᵢ to the
+//!    multiplier rows (partial sums: the ghost summation completes them on the owner),
+//!    and the owner adds the reference point's rows; `prescribed` returns the driven
+//!    DOFs; `columns` publishes `tip.ux … tip.mz`.
+//! 3. **Deck section**: a `[[couplings]]` table in `scene/deck.rs` and its validation in
+//!    `scene/coupling.rs`, which turns it into the definition (errors name the field).
+//!
+//! Nothing else changes: the partition graph, the ghost sets, the matrix pattern, the
+//! solvers and the output read the list.
+
+use super::dofs::{DofMap, Unknowns};
+use crate::linalg::DistMatrix;
+
+/// One evaluation of a contribution at a state. Vectors are local (3 entries per local
+/// block, see [`DofMap`]); a contribution may add to any entry it holds, ghosts
+/// included.
+pub struct Evaluation<'a> {
+    /// (Pseudo-)time of the state.
+    pub t: f64,
+    /// Reference coordinates of the local nodes.
+    pub coords: &'a [[f64; 3]],
+    pub dofs: &'a DofMap,
+    /// Unknowns at the state: displacements of the local nodes, then extras.
+    pub u: &'a [f64],
+    /// Internal forces (and constraint rows) and external forces, when a residual is
+    /// wanted: r = f_int − f_ext.
+    pub forces: Option<(&'a mut [f64], &'a mut [f64])>,
+    /// The Jacobian ∂r/∂u, when wanted: blocks by global index (rows owned elsewhere
+    /// are sent to their owners by the matrix).
+    pub jacobian: Option<&'a mut DistMatrix>,
+}
+
+/// What the reference stiffness says about each local node, for contributions whose
+/// scale comes from the mesh (a contact κ, a penalty stiffness).
+pub struct Reference<'a> {
+    /// Mean diagonal entry of each owned node's 3×3 stiffness block at the reference
+    /// state (0 for ghost nodes).
+    pub k_diag: &'a [f64],
+    /// (1 + ν)(1 − 2ν)/(1 − ν), the smallest over the node's materials: scales the
+    /// P-wave modulus that dominates `k_diag` down to Young's modulus.
+    pub e_factor: &'a [f64],
+    /// Mean of `k_diag` over every owned node of the model (all ranks).
+    pub k_mean: f64,
+}
+
+/// How a history column's per-rank values combine.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Reduce {
+    /// Summed over ranks (forces: each rank adds its nodes' share).
+    Sum,
+    /// The largest over ranks.
+    Max,
+    /// The same on every rank (a prescribed motion); taken as is.
+    Replicated,
+}
+
+/// A history column a contribution publishes.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Column {
+    pub name: String,
+    pub reduce: Reduce,
+    /// Shared columns (`max_penetration`, contact counts) may come from several
+    /// contributions: they are combined by `reduce` into one column placed after all
+    /// the others.
+    pub shared: bool,
+    /// The run's summary carries the largest value over the steps under this name.
+    pub run_max: bool,
+    /// An integer count (written as one).
+    pub count: bool,
+}
+
+impl Column {
+    pub fn sum(name: impl Into<String>) -> Self {
+        Self {
+            name: name.into(),
+            reduce: Reduce::Sum,
+            shared: false,
+            run_max: false,
+            count: false,
+        }
+    }
+    pub fn replicated(name: impl Into<String>) -> Self {
+        Self {
+            reduce: Reduce::Replicated,
+            ..Self::sum(name)
+        }
+    }
+}
+
+/// Where a field lives.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Center {
+    /// One row per owned node.
+    Node,
+    /// One row per local element.
+    Cell,
+}
+
+/// How values of a field that several contributions publish combine, entry by entry.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Combine {
+    Sum,
+    Min,
+    /// The first contribution (in model order) that has a value.
+    First,
+}
+
+/// An output field a contribution publishes.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FieldSpec {
+    pub name: String,
+    pub center: Center,
+    /// Components per row: 1, 3 or 6 (Voigt xx, yy, zz, xy, yz, xz).
+    pub width: usize,
+    pub combine: Combine,
+    /// The value of rows no contribution sets.
+    pub empty: f64,
+}
+
+/// What a contribution's field or column values are computed from.
+pub struct State<'a> {
+    pub t: f64,
+    pub coords: &'a [[f64; 3]],
+    pub dofs: &'a DofMap,
+    /// The converged unknowns, local.
+    pub u: &'a [f64],
+}
+
+/// Moving geometry drawn beside the mesh (a wall's surface, a reference point): cells
+/// of 1 (points), 2 (segments) or 3 (triangles) point indices, written once, and points
+/// written at every output step.
+#[derive(Debug, Clone, PartialEq)]
+pub struct GridSpec {
+    /// HDF5 group path, e.g. `walls/floor` (`/walls/floor/cells`, and per step
+    /// `/steps/NNNNNN/walls/floor/points`).
+    pub name: String,
+    /// The XDMF grid's name (the block name ParaView shows), e.g. `wall_floor`.
+    pub label: String,
+    /// String attributes of the HDF5 group.
+    pub attrs: Vec<(String, String)>,
+    pub cells: Vec<Vec<usize>>,
+    pub n_points: usize,
+}
+
+/// A summary entry: `summary.json[group][name] = value`.
+pub type SummaryEntry = (&'static str, String, serde_json::Value);
+
+/// See the module documentation. Every method but `name` and `evaluate` has a default
+/// for contributions without that aspect.
+pub trait Contribution {
+    /// The deck name (or kind) of this contribution, for messages and outputs.
+    fn name(&self) -> &str;
+
+    /// The unknowns it adds (called once, before the unknown map exists).
+    fn unknowns(&self) -> Unknowns {
+        Unknowns::default()
+    }
+    /// Where its unknowns landed; `index` is its position in the model's list.
+    fn bind(&mut self, _dofs: &DofMap, _index: usize) {}
+    /// The (row, column) global blocks its Jacobian fills on this rank.
+    fn pattern(&self, _dofs: &DofMap, _out: &mut Vec<(usize, usize)>) {}
+
+    /// Whether [`Contribution::setup`] needs the reference stiffness.
+    fn wants_reference(&self) -> bool {
+        false
+    }
+    /// Scales from the reference stiffness (called once, if wanted anywhere).
+    fn setup(&mut self, _r: &Reference) {}
+
+    /// Add the residual and/or Jacobian at the state. `Err` says why the state cannot be
+    /// evaluated (an inverted element): the model agrees on it across ranks.
+    fn evaluate(&mut self, ev: &mut Evaluation) -> Result<(), String>;
+
+    /// Prescribed values at time t of unknowns it owns here: (owned index, value).
+    fn prescribed(&self, _t: f64, _dofs: &DofMap, _out: &mut Vec<(usize, f64)>) {}
+
+    /// The last evaluation becomes the start of the next step.
+    fn commit(&mut self) {}
+
+    /// History columns (the same on every rank).
+    fn columns(&self) -> Vec<Column> {
+        Vec::new()
+    }
+    /// This rank's values of its columns at the last evaluation, combined over ranks by
+    /// each column's [`Reduce`].
+    fn column_values(&self, _s: &State, _out: &mut [f64]) {}
+    /// Its summary entry, from its reduced column values at the last step.
+    fn summary(&self, _values: &[f64]) -> Option<SummaryEntry> {
+        None
+    }
+
+    /// Output fields (the same on every rank).
+    fn fields(&self) -> Vec<FieldSpec> {
+        Vec::new()
+    }
+    /// Its fields' rows on this rank, `out[i]` for field i: each has the field's shape
+    /// and holds NaN where this contribution sets nothing.
+    fn field_values(&self, _s: &State, _out: &mut [Vec<f64>]) {}
+
+    /// Moving geometry (the same on every rank).
+    fn grids(&self) -> Vec<GridSpec> {
+        Vec::new()
+    }
+    /// Grid `i`'s points at time t (rank 0 writes them), from the contribution's
+    /// reduced column values at that step.
+    fn grid_points(&self, _i: usize, _t: f64, _values: &[f64]) -> Vec<[f64; 3]> {
+        Vec::new()
+    }
+
+    /// An explicit run is starting: contributions that cannot take part say why.
+    fn start_explicit(&mut self) -> Result<(), String> {
+        Ok(())
+    }
+    /// Explicit runs, after the displacement update of a step ending at t (length h):
+    /// kinematic corrections of owned node displacements `u` and mid-step velocities
+    /// `v` (owned vectors; `m` the lumped mass).
+    fn kinematic(
+        &mut self,
+        _coords: &[[f64; 3]],
+        _u: &mut [f64],
+        _v: &mut [f64],
+        _m: &[f64],
+        _t: f64,
+        _h: f64,
+    ) {
+    }
+    /// Implicit dynamics, after a converged step ending at t: corrections of owned
+    /// velocities and accelerations (contact persistency).
+    fn persistency(&self, _v: &mut [f64], _a: &mut [f64], _t: f64, _h: f64) {}
+}

@@ -1,0 +1,244 @@
+//! The solid elements of one rank as a contribution: the element loop (internal forces
+//! and tangents from `fem` kernels and `material` models), the material history, and the
+//! element fields (stress, von Mises, plastic strain). The model also reaches it by type
+//! for what only elements have: mass, the explicit stable step, the mesh for output.
+
+use super::contribution::{Center, Combine, Contribution, Evaluation, FieldSpec, State};
+use super::def::MaterialDef;
+use super::distribute::LocalElements;
+use crate::fem::element::{element_force, element_stress, n_gauss, von_mises};
+use crate::material::Material;
+
+pub struct Solids {
+    pub elements: LocalElements,
+    pub materials: Vec<Box<dyn Material>>,
+    /// The definitions the materials were built from (ν for contact scales).
+    pub material_defs: Vec<MaterialDef>,
+    /// Per element offset into the history arrays.
+    state_offset: Vec<usize>,
+    /// History at the start of the step (committed) and at the last evaluation.
+    pub(crate) state_old: Vec<f64>,
+    pub(crate) state_new: Vec<f64>,
+    /// Element evaluations so far (for rates).
+    pub evaluations: u64,
+}
+
+impl Solids {
+    pub fn new(elements: LocalElements, materials: &[(String, MaterialDef)]) -> Self {
+        let built: Vec<Box<dyn Material>> = materials.iter().map(|(_, m)| m.build()).collect();
+        let mut state_offset = Vec::with_capacity(elements.len() + 1);
+        let mut s = 0;
+        for e in 0..elements.len() {
+            state_offset.push(s);
+            s += n_gauss(elements.kinds[e]) * built[elements.material[e] as usize].n_state();
+        }
+        state_offset.push(s);
+        Self {
+            elements,
+            materials: built,
+            material_defs: materials.iter().map(|(_, m)| m.clone()).collect(),
+            state_offset,
+            state_old: vec![0.0; s],
+            state_new: vec![0.0; s],
+            evaluations: 0,
+        }
+    }
+
+    pub fn len(&self) -> usize {
+        self.elements.len()
+    }
+    pub fn is_empty(&self) -> bool {
+        self.elements.is_empty()
+    }
+
+    pub fn material(&self, e: usize) -> &dyn Material {
+        self.materials[self.elements.material[e] as usize].as_ref()
+    }
+
+    /// The committed history of element e.
+    pub fn history(&self, e: usize) -> &[f64] {
+        &self.state_old[self.state_offset[e]..self.state_offset[e + 1]]
+    }
+
+    /// Reference coordinates and displacements of element e's nodes; returns its node
+    /// count.
+    pub fn gather(
+        &self,
+        e: usize,
+        coords: &[[f64; 3]],
+        u_local: &[f64],
+        x0: &mut [[f64; 3]; 8],
+        u: &mut [[f64; 3]; 8],
+    ) -> usize {
+        let nodes = self.elements.nodes(e);
+        for (a, &n) in nodes.iter().enumerate() {
+            x0[a] = coords[n];
+            u[a] = [u_local[3 * n], u_local[3 * n + 1], u_local[3 * n + 2]];
+        }
+        nodes.len()
+    }
+
+    /// Whether any material carries an equivalent plastic strain (the same on every
+    /// rank: every rank holds the whole material list).
+    pub fn has_plastic_strain(&self) -> bool {
+        self.materials.iter().any(|m| {
+            m.equivalent_plastic_strain(&vec![0.0; m.n_state()])
+                .is_some()
+        })
+    }
+
+    /// Equivalent plastic strain of every local element at the last committed state:
+    /// the mean over its integration points (0 for elastic materials).
+    pub fn plastic_strains(&self) -> Vec<f64> {
+        (0..self.len())
+            .map(|e| {
+                let mat = self.material(e);
+                let ns = mat.n_state();
+                let h = self.history(e);
+                if ns == 0 || h.is_empty() {
+                    return 0.0;
+                }
+                let pts = h.chunks(ns);
+                let n = pts.len() as f64;
+                pts.map(|s| mat.equivalent_plastic_strain(s).unwrap_or(0.0))
+                    .sum::<f64>()
+                    / n
+            })
+            .collect()
+    }
+
+    /// Volume-averaged Cauchy stress of every local element at `u_local` (NaN where an
+    /// element cannot be evaluated).
+    pub fn stresses(&self, coords: &[[f64; 3]], u_local: &[f64]) -> Vec<[f64; 6]> {
+        let mut x0 = [[0.0; 3]; 8];
+        let mut ue = [[0.0; 3]; 8];
+        (0..self.len())
+            .map(|e| {
+                let n = self.gather(e, coords, u_local, &mut x0, &mut ue);
+                element_stress(
+                    self.elements.kinds[e],
+                    self.elements.formulation[e],
+                    &x0[..n],
+                    &ue[..n],
+                    self.material(e),
+                    self.history(e),
+                )
+                .unwrap_or([f64::NAN; 6])
+            })
+            .collect()
+    }
+
+    /// Sum of the characteristic lengths of the local elements.
+    pub fn char_length_sum(&self, coords: &[[f64; 3]]) -> f64 {
+        (0..self.len())
+            .map(|e| {
+                let x0: Vec<[f64; 3]> = self.elements.nodes(e).iter().map(|&n| coords[n]).collect();
+                crate::fem::element::char_length(self.elements.kinds[e], &x0)
+            })
+            .sum()
+    }
+}
+
+impl Contribution for Solids {
+    fn name(&self) -> &str {
+        "solids"
+    }
+
+    fn pattern(&self, dofs: &super::dofs::DofMap, out: &mut Vec<(usize, usize)>) {
+        for e in 0..self.len() {
+            let nodes = self.elements.nodes(e);
+            for &a in nodes {
+                for &b in nodes {
+                    out.push((dofs.global_block(a), dofs.global_block(b)));
+                }
+            }
+        }
+    }
+
+    /// One loop over the local elements: internal forces and/or element tangents. The
+    /// first element that cannot be evaluated (an inverted element) is reported after
+    /// the loop.
+    fn evaluate(&mut self, ev: &mut Evaluation) -> Result<(), String> {
+        let mut failure: Option<String> = None;
+        let mut x0 = [[0.0; 3]; 8];
+        let mut ue = [[0.0; 3]; 8];
+        let mut fe = [0.0; 24];
+        let want_k = ev.jacobian.is_some();
+        let mut ke = vec![0.0; if want_k { 576 } else { 0 }];
+        let mut blocks = [0usize; 8];
+        for e in 0..self.len() {
+            let n = self.gather(e, ev.coords, ev.u, &mut x0, &mut ue);
+            let mat = self.materials[self.elements.material[e] as usize].as_ref();
+            let (s0, s1) = (self.state_offset[e], self.state_offset[e + 1]);
+            let res = element_force(
+                self.elements.kinds[e],
+                self.elements.formulation[e],
+                &x0[..n],
+                &ue[..n],
+                mat,
+                &self.state_old[s0..s1],
+                &mut self.state_new[s0..s1],
+                &mut fe[..3 * n],
+                if want_k {
+                    Some(&mut ke[..9 * n * n])
+                } else {
+                    None
+                },
+            );
+            if let Err(err) = res {
+                failure
+                    .get_or_insert_with(|| format!("element {}: {}", self.elements.orig[e], err.0));
+                continue;
+            }
+            let nodes = self.elements.nodes(e);
+            if let Some((f, _)) = ev.forces.as_mut() {
+                for (a, &node) in nodes.iter().enumerate() {
+                    for c in 0..3 {
+                        f[3 * node + c] += fe[3 * a + c];
+                    }
+                }
+            }
+            if let Some(k) = ev.jacobian.as_deref_mut() {
+                for (a, &node) in nodes.iter().enumerate() {
+                    blocks[a] = ev.dofs.global_block(node);
+                }
+                k.add_element(&blocks[..n], &ke[..9 * n * n]);
+            }
+        }
+        self.evaluations += self.len() as u64;
+        match failure {
+            Some(f) => Err(f),
+            None => Ok(()),
+        }
+    }
+
+    fn commit(&mut self) {
+        self.state_old.copy_from_slice(&self.state_new);
+    }
+
+    fn fields(&self) -> Vec<FieldSpec> {
+        let cell = |name: &str, width| FieldSpec {
+            name: name.into(),
+            center: Center::Cell,
+            width,
+            combine: Combine::First,
+            empty: f64::NAN,
+        };
+        let mut f = vec![cell("stress", 6), cell("von_mises", 1)];
+        if self.has_plastic_strain() {
+            f.push(cell("plastic_strain", 1));
+        }
+        f
+    }
+
+    fn field_values(&self, s: &State, out: &mut [Vec<f64>]) {
+        let sig = self.stresses(s.coords, s.u);
+        out[0].copy_from_slice(&sig.concat());
+        for (o, v) in out[1].iter_mut().zip(&sig) {
+            *o = von_mises(v);
+        }
+        if out.len() > 2 {
+            out[2].copy_from_slice(&self.plastic_strains());
+        }
+    }
+}

@@ -1,0 +1,682 @@
+//! A rigid wall as a contribution (DESIGN.md "Contact: the formulation", the paper's
+//! §2.1): every tracked node this rank owns is projected onto the wall, the ALM or
+//! penalty law ([`crate::contact::law`]) gives its force and, for ALM, the residual rows
+//! of its three multipliers (unknowns owned with the node), and the generalized
+//! Jacobian blocks. The wall publishes its force, moment and prescribed displacement,
+//! the shared contact columns (penetration, active and sticking counts), the nodal
+//! contact fields and its moving surface.
+
+// Index loops over 3×3 frames read like the formulas.
+#![allow(clippy::needless_range_loop)]
+
+use super::contribution::{
+    Center, Column, Combine, Contribution, Evaluation, FieldSpec, GridSpec, Reduce, Reference,
+    State, SummaryEntry,
+};
+use super::def::{ContributionDef, ContributionKind, Localizer};
+use super::distribute::LocalModel;
+use super::dofs::{DofMap, Unknowns};
+use crate::contact::law::{alm, penalty};
+use crate::contact::motion::{Pose, RigidMotion};
+use crate::contact::shape::Shape;
+use crate::contact::wall::{project, ContactMethod, ShapeDef};
+use serde::{Deserialize, Serialize};
+
+/// Jacobian-only regularization of the multiplier rows (relative to κ).
+const JACOBIAN_REG: f64 = 1e-8;
+
+/// A rigid wall of the model: shape, placement and prescribed motion, friction, the
+/// enforcement method and the tracked nodes (node-to-surface, one way, as the paper's
+/// rigid walls). `nodes` are global node numbers in a [`super::def::ModelDef`] and
+/// owned local nodes once localized.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct WallDef {
+    pub name: String,
+    pub shape: ShapeDef,
+    pub motion: RigidMotion,
+    /// Coulomb friction coefficient μ.
+    pub friction: f64,
+    pub method: ContactMethod,
+    /// ALM scale κ (force per length); None = from the stiffness at each node.
+    pub kappa: Option<f64>,
+    /// Penalty stiffness as a multiple of the nodal stiffness (LS-DYNA's SLSFAC idea).
+    pub penalty_scale: f64,
+    /// The tracked node set's name (for messages).
+    pub set: String,
+    pub nodes: Vec<usize>,
+    /// Tributary area of each tracked node on the tracked surface (0 where unknown).
+    pub areas: Vec<f64>,
+}
+
+impl ContributionKind for WallDef {
+    fn kind_name(&self) -> &'static str {
+        "wall"
+    }
+    fn name(&self) -> &str {
+        &self.name
+    }
+    fn nodes(&self) -> Vec<usize> {
+        self.nodes.clone()
+    }
+    fn extra_unknowns(&self) -> usize {
+        if self.method == ContactMethod::Alm {
+            3 * self.nodes.len()
+        } else {
+            0
+        }
+    }
+    fn describe(&self) -> String {
+        format!(
+            "wall {}: {} {}, μ = {}, {} tracked nodes ({})",
+            self.name,
+            self.method.name(),
+            self.shape.build().kind(),
+            self.friction,
+            self.nodes.len(),
+            self.set
+        )
+    }
+    /// Each rank tracks the nodes it owns (contact forces act on the node only).
+    fn localize(&self, l: &Localizer) -> ContributionDef {
+        let mut mine: Vec<(usize, f64)> = self
+            .nodes
+            .iter()
+            .zip(&self.areas)
+            .filter_map(|(&n, &a)| l.owned(n).map(|ln| (ln, a)))
+            .collect();
+        mine.sort_by_key(|p| p.0);
+        ContributionDef::Wall(WallDef {
+            nodes: mine.iter().map(|p| p.0).collect(),
+            areas: mine.iter().map(|p| p.1).collect(),
+            ..self.clone()
+        })
+    }
+    fn build(&self, local: &LocalModel) -> Box<dyn Contribution> {
+        Box::new(Wall::new(self.clone(), &local.mesh.coords))
+    }
+    fn set_contact_method(&mut self, m: ContactMethod) {
+        self.method = m;
+    }
+}
+
+/// What one tracked node did at the last evaluation.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct NodeContact {
+    /// Signed normal gap (NaN where the node cannot reach the wall).
+    pub gap: f64,
+    /// Force the wall exerts on the node (global).
+    pub force: [f64; 3],
+    /// Multipliers (λ_N, λ_T1, λ_T2), lengths (zero for penalty).
+    pub lambda: [f64; 3],
+    /// Normal component of `force` (along the wall's outward normal; > 0 pushes the
+    /// node out of the wall).
+    pub normal_force: f64,
+    pub active: bool,
+    pub sticking: bool,
+}
+
+/// One wall on this rank (its owned tracked nodes).
+#[derive(Debug)]
+pub struct Wall {
+    pub def: WallDef,
+    pub shape: Box<dyn Shape>,
+    /// Local block of the first multiplier (ALM), else None.
+    mult: Option<usize>,
+    /// κ of each tracked node (force per length), ALM's scale.
+    pub kappa: Vec<f64>,
+    /// The diagonal stiffness of each tracked node (the penalty's base).
+    pub k_node: Vec<f64>,
+    /// Start time of the step (committed) and the time of the last evaluation.
+    t_old: f64,
+    t_new: f64,
+    /// Explicit runs enforce ALM walls kinematically: the residual pass is skipped.
+    explicit: bool,
+    /// Node positions at the start of the step (committed) and at the last evaluation.
+    x_old: Vec<[f64; 3]>,
+    x_new: Vec<[f64; 3]>,
+    /// Outward normal of each node's projection at the start of the step (the hint that
+    /// keeps a penetrating node on the face it came through) and at the last evaluation.
+    n_old: Vec<Option<[f64; 3]>>,
+    n_new: Vec<Option<[f64; 3]>>,
+    /// Penalty tangential force carried over steps (global vector).
+    ft_old: Vec<[f64; 3]>,
+    ft_new: Vec<[f64; 3]>,
+    pub last: Vec<NodeContact>,
+}
+
+/// Local residual and Jacobian blocks of one tracked node.
+struct NodeEval {
+    c: NodeContact,
+    /// r_node contribution (minus the force on the node).
+    r_node: [f64; 3],
+    /// r_λ rows (ALM).
+    r_mult: [f64; 3],
+    k_xx: [[f64; 3]; 3],
+    k_xl: [[f64; 3]; 3],
+    k_lx: [[f64; 3]; 3],
+    k_ll: [[f64; 3]; 3],
+    ft_new: [f64; 3],
+    normal: Option<[f64; 3]>,
+}
+
+fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
+
+fn flat(a: [[f64; 3]; 3]) -> [f64; 9] {
+    [
+        a[0][0], a[0][1], a[0][2], a[1][0], a[1][1], a[1][2], a[2][0], a[2][1], a[2][2],
+    ]
+}
+
+impl Wall {
+    pub fn new(def: WallDef, coords: &[[f64; 3]]) -> Self {
+        let n = def.nodes.len();
+        let x0: Vec<[f64; 3]> = def.nodes.iter().map(|&i| coords[i]).collect();
+        Self {
+            shape: def.shape.build(),
+            mult: None,
+            kappa: vec![def.kappa.unwrap_or(1.0); n],
+            k_node: vec![1.0; n],
+            t_old: 0.0,
+            t_new: 0.0,
+            explicit: false,
+            x_old: x0.clone(),
+            x_new: x0,
+            n_old: vec![None; n],
+            n_new: vec![None; n],
+            ft_old: vec![[0.0; 3]; n],
+            ft_new: vec![[0.0; 3]; n],
+            last: vec![NodeContact::default(); n],
+            def,
+        }
+    }
+
+    fn is_alm(&self) -> bool {
+        self.def.method == ContactMethod::Alm
+    }
+
+    /// One tracked node placed at `pose` (`pose_old` at the step's start).
+    fn node(&self, j: usize, x: [f64; 3], lam: [f64; 3], pose: &Pose, pose_old: &Pose) -> NodeEval {
+        let mut e = NodeEval {
+            c: NodeContact {
+                gap: f64::NAN,
+                lambda: lam,
+                ..NodeContact::default()
+            },
+            r_node: [0.0; 3],
+            r_mult: [0.0; 3],
+            k_xx: [[0.0; 3]; 3],
+            k_xl: [[0.0; 3]; 3],
+            k_lx: [[0.0; 3]; 3],
+            k_ll: [[0.0; 3]; 3],
+            ft_new: [0.0; 3],
+            normal: None,
+        };
+        let kappa = self.kappa[j];
+        let alm_wall = self.is_alm();
+        let Some(wp) = project(self.shape.as_ref(), pose, pose_old, x, self.n_old[j]) else {
+            // Out of the wall's reach: multipliers driven to zero, no force.
+            if alm_wall {
+                for i in 0..3 {
+                    e.r_mult[i] = -kappa * lam[i];
+                    e.k_ll[i][i] = -kappa;
+                }
+            }
+            return e;
+        };
+        let p = wp.frame;
+        let xo = self.x_old[j];
+        // Slip over the step, on the tangent plane: t·(wall point's old position − x_old)
+        // (t·(x − point) = 0), DESIGN.md "g_T".
+        let d = [
+            wp.point_old[0] - xo[0],
+            wp.point_old[1] - xo[1],
+            wp.point_old[2] - xo[2],
+        ];
+        let g = [
+            wp.gap,
+            p[0][1] * d[0] + p[1][1] * d[1] + p[2][1] * d[2],
+            p[0][2] * d[0] + p[1][2] * d[1] + p[2][2] * d[2],
+        ];
+        e.c.gap = wp.gap;
+        e.normal = Some([p[0][0], p[1][0], p[2][0]]);
+        let mu = self.def.friction;
+        // f_local (force on the node in the frame), ∂f_local/∂g, and for ALM ∂f/∂λ.
+        let (fl, dfdg) = if alm_wall {
+            let pt = alm(g, lam, mu);
+            e.c.active = pt.active;
+            e.c.sticking = pt.sticking;
+            let mut fl = [0.0; 3];
+            let mut dfdg = [[0.0; 3]; 3];
+            for i in 0..3 {
+                fl[i] = kappa * (lam[i] - pt.h[i]);
+                e.r_mult[i] = -kappa * pt.h[i];
+                for k in 0..3 {
+                    dfdg[i][k] = -kappa * pt.dh_dg[i][k];
+                    let id = if i == k { 1.0 } else { 0.0 };
+                    // r_λ = −κ h: ∂/∂λ = −κ ∂h/∂λ, ∂/∂x = −κ ∂h/∂g Pᵀ.
+                    // A stick or active row has no λ term; where the node's own dof
+                    // along that direction is prescribed (a symmetry plane) the row
+                    // would then be empty. A −10⁻⁸ κ diagonal in the Jacobian only
+                    // (the residual stays exact) keeps the matrix regular; the row's
+                    // residual is then zero, so λ there does not move.
+                    e.k_ll[i][k] =
+                        -kappa * (pt.dh_dl[i][k] + if i == k { JACOBIAN_REG } else { 0.0 });
+                    // ∂(κ(λ − h))/∂λ in the frame; mapped to global rows below.
+                    e.k_xl[i][k] = kappa * (id - pt.dh_dl[i][k]);
+                }
+            }
+            (fl, dfdg)
+        } else {
+            let fo = self.ft_old[j];
+            let t1 = [p[0][1], p[1][1], p[2][1]];
+            let t2 = [p[0][2], p[1][2], p[2][2]];
+            let fo_l = [
+                t1[0] * fo[0] + t1[1] * fo[1] + t1[2] * fo[2],
+                t2[0] * fo[0] + t2[1] * fo[1] + t2[2] * fo[2],
+            ];
+            let kp = self.def.penalty_scale * self.k_node[j];
+            let pt = penalty(g, fo_l, kp, kp, mu);
+            e.c.active = pt.active;
+            e.c.sticking = pt.sticking;
+            for i in 0..3 {
+                e.ft_new[i] = t1[i] * pt.f[1] + t2[i] * pt.f[2];
+            }
+            (pt.f, pt.df_dg)
+        };
+        // Global force on the node f = P f_local; r_node = −f.
+        let mut f = [0.0; 3];
+        for i in 0..3 {
+            for k in 0..3 {
+                f[i] += p[i][k] * fl[k];
+            }
+            e.r_node[i] = -f[i];
+        }
+        e.c.force = f;
+        e.c.normal_force = fl[0];
+        // ∂r_node/∂x = −P (∂f/∂g) Pᵀ − f_N H (the normal turns with x on curved walls;
+        // the tangents' turning is left out).
+        let mut a = [[0.0; 3]; 3];
+        for i in 0..3 {
+            for k in 0..3 {
+                for l in 0..3 {
+                    a[i][k] += p[i][l] * dfdg[l][k];
+                }
+            }
+        }
+        for i in 0..3 {
+            for k in 0..3 {
+                let mut s = 0.0;
+                for l in 0..3 {
+                    s += a[i][l] * p[k][l];
+                }
+                e.k_xx[i][k] = -s - fl[0] * wp.hessian[i][k];
+            }
+        }
+        if alm_wall {
+            // Node rows: ∂r_node/∂λ = −P ∂f/∂λ; multiplier rows: ∂r_λ/∂x = −κ ∂h/∂g Pᵀ
+            // = (∂f/∂g) Pᵀ.
+            let fl_l = e.k_xl;
+            let mut k_lx = [[0.0; 3]; 3];
+            let mut k_xl = [[0.0; 3]; 3];
+            for i in 0..3 {
+                for k in 0..3 {
+                    for l in 0..3 {
+                        k_xl[i][k] -= p[i][l] * fl_l[l][k];
+                        k_lx[i][k] += dfdg[i][l] * p[k][l];
+                    }
+                }
+            }
+            e.k_xl = k_xl;
+            e.k_lx = k_lx;
+        }
+        e
+    }
+}
+
+/// Column layout of a wall: force, moment, displacement, then the shared ones.
+const N_OWN_COLUMNS: usize = 9;
+
+impl Contribution for Wall {
+    fn name(&self) -> &str {
+        &self.def.name
+    }
+
+    /// ALM: three multipliers per tracked node, owned with the node.
+    fn unknowns(&self) -> Unknowns {
+        Unknowns {
+            owned: if self.is_alm() {
+                self.def.nodes.len()
+            } else {
+                0
+            },
+            ..Unknowns::default()
+        }
+    }
+    fn bind(&mut self, dofs: &DofMap, index: usize) {
+        if self.is_alm() {
+            self.mult = Some(dofs.placed(index).owned_local);
+        }
+    }
+    fn pattern(&self, dofs: &DofMap, out: &mut Vec<(usize, usize)>) {
+        for (j, &n) in self.def.nodes.iter().enumerate() {
+            let a = dofs.global_block(n);
+            out.push((a, a));
+            if let Some(m0) = self.mult {
+                let m = dofs.global_block(m0 + j);
+                out.extend_from_slice(&[(a, m), (m, a), (m, m)]);
+            }
+        }
+    }
+
+    fn wants_reference(&self) -> bool {
+        !self.def.nodes.is_empty()
+    }
+    /// The nodal stiffness of every tracked node from the reference stiffness: the
+    /// penalty stiffness is `penalty_scale` times the diagonal (bulk-dominated, as
+    /// LS-DYNA's k = f K A²/V). κ of ALM (without a deck value) is the diagonal scaled
+    /// from the P-wave modulus λ + 2μ that dominates it down to Young's modulus E: κ is
+    /// the friction law's augmentation parameter (γ compares λ_T with the slip g_T);
+    /// Alart–Curnier-type semi-smooth Newton wants it of the order of E·h, and a
+    /// bulk-dominated κ (rubber: K/G ~ 1000) made the stick/slip decisions cycle.
+    fn setup(&mut self, r: &Reference) {
+        for (j, &n) in self.def.nodes.iter().enumerate() {
+            let (d, f) = (r.k_diag[n], r.e_factor[n]);
+            self.k_node[j] = d.max(f64::MIN_POSITIVE);
+            if self.def.kappa.is_none() {
+                self.kappa[j] = (f * d).max(f64::MIN_POSITIVE);
+            }
+        }
+    }
+
+    /// Forces on the tracked nodes count as external; multiplier rows (−κ h, zero at a
+    /// solution) go with the internal forces. Also keeps each node's state for the
+    /// report and the commit.
+    fn evaluate(&mut self, ev: &mut Evaluation) -> Result<(), String> {
+        self.t_new = ev.t;
+        if self.explicit && self.is_alm() {
+            return Ok(());
+        }
+        let (pose, pose_old) = (self.def.motion.pose(ev.t), self.def.motion.pose(self.t_old));
+        for j in 0..self.def.nodes.len() {
+            let n = self.def.nodes[j];
+            let x = [
+                ev.coords[n][0] + ev.u[3 * n],
+                ev.coords[n][1] + ev.u[3 * n + 1],
+                ev.coords[n][2] + ev.u[3 * n + 2],
+            ];
+            let lam = match self.mult {
+                Some(m) => {
+                    let o = 3 * (m + j);
+                    [ev.u[o], ev.u[o + 1], ev.u[o + 2]]
+                }
+                None => [0.0; 3],
+            };
+            let e = self.node(j, x, lam, &pose, &pose_old);
+            if let Some((f_int, f_ext)) = ev.forces.as_mut() {
+                for c in 0..3 {
+                    f_ext[3 * n + c] -= e.r_node[c];
+                }
+                if let Some(m) = self.mult {
+                    for c in 0..3 {
+                        f_int[3 * (m + j) + c] += e.r_mult[c];
+                    }
+                }
+            }
+            if let Some(k) = ev.jacobian.as_deref_mut() {
+                let a = ev.dofs.global_block(n);
+                k.add_block(a, a, &flat(e.k_xx));
+                if let Some(m0) = self.mult {
+                    let m = ev.dofs.global_block(m0 + j);
+                    k.add_block(a, m, &flat(e.k_xl));
+                    k.add_block(m, a, &flat(e.k_lx));
+                    k.add_block(m, m, &flat(e.k_ll));
+                }
+            }
+            self.x_new[j] = x;
+            self.ft_new[j] = e.ft_new;
+            self.n_new[j] = e.normal;
+            self.last[j] = e.c;
+        }
+        Ok(())
+    }
+
+    fn commit(&mut self) {
+        self.t_old = self.t_new;
+        self.x_old.copy_from_slice(&self.x_new);
+        self.ft_old.copy_from_slice(&self.ft_new);
+        self.n_old.copy_from_slice(&self.n_new);
+    }
+
+    /// `<wall>.fx … .mz`: force and moment on the wall (about its current origin) at the
+    /// last evaluation, `<wall>.ux … .uz` its prescribed displacement; shared:
+    /// `max_penetration` (max(0, −g_N) over all tracked nodes of all walls),
+    /// `contact_active`, `contact_sticking`.
+    fn columns(&self) -> Vec<Column> {
+        let w = &self.def.name;
+        let mut c: Vec<Column> = ["fx", "fy", "fz", "mx", "my", "mz"]
+            .iter()
+            .map(|s| Column::sum(format!("{w}.{s}")))
+            .collect();
+        c.extend(
+            ["ux", "uy", "uz"]
+                .iter()
+                .map(|s| Column::replicated(format!("{w}.{s}"))),
+        );
+        c.push(Column {
+            reduce: Reduce::Max,
+            shared: true,
+            run_max: true,
+            ..Column::sum("max_penetration")
+        });
+        for name in ["contact_active", "contact_sticking"] {
+            c.push(Column {
+                shared: true,
+                count: true,
+                ..Column::sum(name)
+            });
+        }
+        c
+    }
+    fn column_values(&self, _s: &State, out: &mut [f64]) {
+        let origin = self.def.motion.pose(self.t_new).origin;
+        for (j, nc) in self.last.iter().enumerate() {
+            let on_wall = [-nc.force[0], -nc.force[1], -nc.force[2]];
+            let x = self.x_new[j];
+            let m = cross(
+                [x[0] - origin[0], x[1] - origin[1], x[2] - origin[2]],
+                on_wall,
+            );
+            for i in 0..3 {
+                out[i] += on_wall[i];
+                out[3 + i] += m[i];
+            }
+            if nc.gap < 0.0 {
+                out[N_OWN_COLUMNS] = out[N_OWN_COLUMNS].max(-nc.gap);
+            }
+            if nc.active {
+                out[N_OWN_COLUMNS + 1] += 1.0;
+            }
+            if nc.sticking {
+                out[N_OWN_COLUMNS + 2] += 1.0;
+            }
+        }
+        out[6..9].copy_from_slice(&self.def.motion.displacement(self.t_new));
+    }
+    fn summary(&self, values: &[f64]) -> Option<SummaryEntry> {
+        let v = |a: usize| [values[a], values[a + 1], values[a + 2]];
+        Some((
+            "walls",
+            self.def.name.clone(),
+            serde_json::json!({ "force": v(0), "moment": v(3), "displacement": v(6) }),
+        ))
+    }
+
+    /// Nodal fields of the tracked nodes at the last evaluation: the gap (the smallest
+    /// over the walls tracking a node; NaN where none can reach it), the pressure
+    /// (normal force / tributary area, summed over walls), the force (summed) and the
+    /// multipliers (the first ALM wall's).
+    fn fields(&self) -> Vec<FieldSpec> {
+        let node = |name: &str, width, combine, empty| FieldSpec {
+            name: name.into(),
+            center: Center::Node,
+            width,
+            combine,
+            empty,
+        };
+        vec![
+            node("contact_gap", 1, Combine::Min, f64::NAN),
+            node("contact_pressure", 1, Combine::Sum, 0.0),
+            node("contact_force", 3, Combine::Sum, 0.0),
+            node("contact_lambda", 3, Combine::First, 0.0),
+        ]
+    }
+    fn field_values(&self, _s: &State, out: &mut [Vec<f64>]) {
+        for (j, (&n, c)) in self.def.nodes.iter().zip(&self.last).enumerate() {
+            out[0][n] = c.gap;
+            let area = self.def.areas.get(j).copied().unwrap_or(0.0);
+            out[1][n] = if area > 0.0 {
+                c.normal_force / area
+            } else {
+                0.0
+            };
+            out[2][3 * n..3 * n + 3].copy_from_slice(&c.force);
+            if self.is_alm() {
+                out[3][3 * n..3 * n + 3].copy_from_slice(&c.lambda);
+            }
+        }
+    }
+
+    fn grids(&self) -> Vec<GridSpec> {
+        let (points, tris) = self.shape.surface();
+        vec![GridSpec {
+            name: format!("walls/{}", self.def.name),
+            label: format!("wall_{}", self.def.name),
+            attrs: vec![
+                ("name".into(), self.def.name.clone()),
+                ("shape".into(), self.shape.kind().into()),
+            ],
+            cells: tris.iter().map(|t| t.to_vec()).collect(),
+            n_points: points.len(),
+        }]
+    }
+    fn grid_points(&self, _i: usize, t: f64, _values: &[f64]) -> Vec<[f64; 3]> {
+        let pose = self.def.motion.pose(t);
+        self.shape
+            .surface()
+            .0
+            .iter()
+            .map(|&p| pose.to_global(p))
+            .collect()
+    }
+
+    fn start_explicit(&mut self) -> Result<(), String> {
+        self.explicit = true;
+        Ok(())
+    }
+
+    /// Kinematic enforcement of an ALM wall in explicit runs (owned node dofs `u`, mid-
+    /// step velocities `v`, lumped masses `m`, the step ending at t of length h): a
+    /// penetrating node is moved onto the wall along the normal and its normal velocity
+    /// relative to the wall is set to zero if it approaches; with friction the
+    /// tangential relative velocity is reduced by at most μ times the normal velocity
+    /// jump (Coulomb on impulses). The force on the node is reported as m Δv / h.
+    fn kinematic(
+        &mut self,
+        coords: &[[f64; 3]],
+        u: &mut [f64],
+        v: &mut [f64],
+        m: &[f64],
+        t: f64,
+        h: f64,
+    ) {
+        self.t_new = t;
+        if !self.is_alm() {
+            return;
+        }
+        let (pose, pose_old) = (self.def.motion.pose(t), self.def.motion.pose(t - h));
+        for j in 0..self.def.nodes.len() {
+            let n = self.def.nodes[j];
+            let x = [
+                coords[n][0] + u[3 * n],
+                coords[n][1] + u[3 * n + 1],
+                coords[n][2] + u[3 * n + 2],
+            ];
+            let mut c = NodeContact {
+                gap: f64::NAN,
+                ..NodeContact::default()
+            };
+            if let Some(wp) = project(self.shape.as_ref(), &pose, &pose_old, x, self.n_old[j]) {
+                c.gap = wp.gap;
+                self.n_new[j] = Some([wp.frame[0][0], wp.frame[1][0], wp.frame[2][0]]);
+                if wp.gap < 0.0 {
+                    let nrm = [wp.frame[0][0], wp.frame[1][0], wp.frame[2][0]];
+                    let vr: [f64; 3] =
+                        std::array::from_fn(|i| v[3 * n + i] - (wp.point[i] - wp.point_old[i]) / h);
+                    let vn = vr[0] * nrm[0] + vr[1] * nrm[1] + vr[2] * nrm[2];
+                    let mut dv = [0.0; 3];
+                    if vn < 0.0 {
+                        let vt: [f64; 3] = std::array::from_fn(|i| vr[i] - vn * nrm[i]);
+                        let vtn = (vt[0] * vt[0] + vt[1] * vt[1] + vt[2] * vt[2]).sqrt();
+                        let cut = if vtn > 0.0 {
+                            (self.def.friction * (-vn) / vtn).min(1.0)
+                        } else {
+                            0.0
+                        };
+                        for i in 0..3 {
+                            dv[i] = -vn * nrm[i] - cut * vt[i];
+                        }
+                        c.sticking = cut >= 1.0;
+                    }
+                    for i in 0..3 {
+                        u[3 * n + i] -= wp.gap * nrm[i];
+                        v[3 * n + i] += dv[i];
+                        c.force[i] = m[3 * n + i] * dv[i] / h;
+                    }
+                    c.normal_force =
+                        c.force[0] * nrm[0] + c.force[1] * nrm[1] + c.force[2] * nrm[2];
+                    c.gap = 0.0;
+                    c.active = true;
+                }
+            }
+            self.x_new[j] = [
+                coords[n][0] + u[3 * n],
+                coords[n][1] + u[3 * n + 1],
+                coords[n][2] + u[3 * n + 2],
+            ];
+            self.last[j] = c;
+        }
+    }
+
+    /// Persistency of contact in implicit dynamics (Laursen & Chawla 1997): for each
+    /// node in contact at the last evaluation (active, pressed: normal force > 0), the
+    /// normal component of its velocity relative to the wall is set to zero and its
+    /// normal acceleration to the wall's (zero for walls moving at constant speed). The
+    /// impact's normal kinetic energy of these nodes is dissipated, as in a perfectly
+    /// inelastic node-wall impact.
+    fn persistency(&self, v: &mut [f64], a: &mut [f64], t: f64, h: f64) {
+        let (pose, pose_old) = (self.def.motion.pose(t), self.def.motion.pose(t - h));
+        for (j, &n) in self.def.nodes.iter().enumerate() {
+            let c = &self.last[j];
+            if !(c.active && c.normal_force > 0.0) {
+                continue;
+            }
+            let Some(nrm) = self.n_new[j] else { continue };
+            let x = self.x_new[j];
+            let before = pose_old.to_global(pose.to_local(x));
+            let vn: f64 = (0..3)
+                .map(|i| (v[3 * n + i] - (x[i] - before[i]) / h) * nrm[i])
+                .sum();
+            let an: f64 = (0..3).map(|i| a[3 * n + i] * nrm[i]).sum();
+            for i in 0..3 {
+                v[3 * n + i] -= vn * nrm[i];
+                a[3 * n + i] -= an * nrm[i];
+            }
+        }
+    }
+}

@@ -1,0 +1,162 @@
+//! The step controller shared by static load stepping and implicit dynamics: the next
+//! step lands exactly on the end time (no sliver of a last step); a step that does not
+//! converge is retried from the last converged state with half the step (a counted
+//! retry; the caller refreshes its preconditioner); after a step that converged in at
+//! most `easy_iterations` without retries the step grows by `growth` up to `max_step`.
+//! Below `min_step` the run ends, keeping everything converged so far.
+
+use super::Analysis;
+
+#[derive(Debug, Clone)]
+pub struct StepControl {
+    pub min_step: f64,
+    pub max_step: f64,
+    pub growth: f64,
+    pub easy_iterations: usize,
+    end: f64,
+    /// The end of the last converged step.
+    t_done: f64,
+    /// The step the next attempt tries.
+    dt: f64,
+    /// Converged steps so far.
+    steps: usize,
+    /// Failed attempts of the step being tried.
+    retries: usize,
+}
+
+impl StepControl {
+    /// From the analysis; a solver budget of `max_iterations` per step makes steps that
+    /// converged in a quarter of it (at least 3) easy.
+    pub fn new(a: &Analysis, max_iterations: usize) -> Self {
+        Self {
+            min_step: a.min_step,
+            max_step: a.max_step,
+            growth: 1.5,
+            easy_iterations: (max_iterations / 4).max(3),
+            end: a.end_time,
+            t_done: 0.0,
+            dt: a.step.min(a.max_step),
+            steps: 0,
+            retries: 0,
+        }
+    }
+
+    /// The next attempt `(t_n, t_{n+1})`, or `None` once the end time is reached.
+    pub fn next(&self) -> Option<(f64, f64)> {
+        if self.t_done >= self.end * (1.0 - 1e-12) {
+            return None;
+        }
+        let mut t = self.t_done + self.dt;
+        if t > self.end * (1.0 - 1e-9) || self.end - t < 1e-3 * self.dt {
+            t = self.end;
+        }
+        Some((self.t_done, t))
+    }
+
+    /// The attempt ending at `t1` failed because of `reason`: halve the step, or, below
+    /// the minimum, the run's failure message (`what` names the step: "step" or "time
+    /// step").
+    pub fn reject(&mut self, t1: f64, reason: &str, what: &str) -> Result<(), String> {
+        let tried = t1 - self.t_done;
+        self.dt = 0.5 * tried;
+        if self.dt < self.min_step {
+            return Err(format!(
+                "step {} (t = {t1}) did not converge: {reason}; the {what} was cut {} time(s) to {tried:.3e}, the minimum is {:.3e}",
+                self.steps + 1,
+                self.retries,
+                self.min_step
+            ));
+        }
+        self.retries += 1;
+        Ok(())
+    }
+
+    /// The attempt ending at `t1` converged in `iterations`: returns the step's number and
+    /// how many retries it took, and grows the next step after an easy one.
+    pub fn accept(&mut self, t1: f64, iterations: usize) -> (usize, usize) {
+        self.steps += 1;
+        let retries = self.retries;
+        if iterations <= self.easy_iterations && retries == 0 {
+            self.dt = (self.dt * self.growth).min(self.max_step);
+        }
+        self.t_done = t1;
+        self.retries = 0;
+        (self.steps, retries)
+    }
+}
+
+/// The pseudo-times of the steps at a constant step `dt` (for reports).
+pub fn step_times(end: f64, dt: f64) -> Vec<f64> {
+    let n = ((end / dt) - 1e-9).ceil().max(1.0) as usize;
+    (1..=n)
+        .map(|i| if i == n { end } else { i as f64 * dt })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::solve::{AnalysisKind, MassKind, Scheme};
+
+    fn analysis(step: f64, min: f64, max: f64) -> Analysis {
+        Analysis {
+            kind: AnalysisKind::Static,
+            end_time: 1.0,
+            step,
+            min_step: min,
+            max_step: max,
+            scheme: Scheme::Newmark,
+            rho_inf: 1.0,
+            mass: MassKind::Consistent,
+            dt_factor: 0.9,
+        }
+    }
+
+    #[test]
+    fn step_times_land_on_the_end() {
+        assert_eq!(step_times(1.0, 0.25), vec![0.25, 0.5, 0.75, 1.0]);
+        let t = step_times(1.0, 0.3);
+        assert_eq!(t.len(), 4);
+        assert_eq!(*t.last().unwrap(), 1.0);
+        assert_eq!(step_times(1.0, 0.1).len(), 10);
+    }
+
+    #[test]
+    fn cut_grow_and_give_up() {
+        let mut c = StepControl::new(&analysis(0.5, 0.1, 0.5), 20);
+        let (t0, t1) = c.next().unwrap();
+        assert_eq!((t0, t1), (0.0, 0.5));
+        // Fail twice: 0.25, then 0.125.
+        c.reject(t1, "x", "step").unwrap();
+        assert_eq!(c.next().unwrap().1, 0.25);
+        c.reject(0.25, "x", "step").unwrap();
+        assert_eq!(c.next().unwrap().1, 0.125);
+        assert_eq!(c.accept(0.125, 2), (1, 2));
+        // No growth after a step that needed retries; then growth by 1.5 after easy ones.
+        assert_eq!(c.next().unwrap(), (0.125, 0.25));
+        assert_eq!(c.accept(0.25, 2), (2, 0));
+        let (_, t) = c.next().unwrap();
+        assert!((t - (0.25 + 0.1875)).abs() < 1e-15);
+        // A hard step does not grow it.
+        assert_eq!(c.accept(t, 10), (3, 0));
+        let (_, t2) = c.next().unwrap();
+        assert!((t2 - t - 0.1875).abs() < 1e-15);
+        // Below the minimum the run ends with the reason.
+        let mut c = StepControl::new(&analysis(0.15, 0.1, 0.15), 20);
+        let (_, t1) = c.next().unwrap();
+        let e = c.reject(t1, "stagnated", "step").unwrap_err();
+        assert!(e.contains("step 1") && e.contains("stagnated"), "{e}");
+    }
+
+    #[test]
+    fn the_last_step_lands_on_the_end() {
+        let mut c = StepControl::new(&analysis(0.3, 0.01, 0.3), 20);
+        let mut times = Vec::new();
+        while let Some((_, t1)) = c.next() {
+            times.push(t1);
+            c.accept(t1, 10);
+        }
+        assert_eq!(times.len(), 4);
+        assert_eq!(*times.last().unwrap(), 1.0);
+    }
+}
