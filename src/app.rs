@@ -163,10 +163,12 @@ pub fn setup(comm: &dyn Comm, opts: &RunOptions, phases: &mut Phases) -> Result<
             run.solver.kind = k;
         }
         let tp = Instant::now();
+        let edges = def.coupling_edges();
+        let req = def.partition_request(&edges);
         let (part, origin, _) = cache::get(
             &opts.partitions,
             &run.name,
-            &def.mesh,
+            &req,
             comm.size(),
             opts.repartition,
         )?;
@@ -491,7 +493,8 @@ pub fn check(target: &str, ranks: usize) -> Result<String> {
     let def = &scene.model;
     let mut s = describe(def, &scene.run);
     if ranks > 1 {
-        let part = crate::partition::partition_elements(&def.mesh, ranks)?;
+        let edges = def.coupling_edges();
+        let part = def.partition_request(&edges).compute(ranks)?;
         s.push_str(&describe_partition(def, &part, ranks)?);
     }
     Ok(s)
@@ -552,7 +555,7 @@ fn nominal_steps(a: &Analysis) -> String {
 fn describe_partition(def: &ModelDef, part: &[u32], ranks: usize) -> Result<String> {
     let q = quality(&def.mesh, part, ranks)?;
     let owner = crate::partition::node_owner(&def.mesh, part);
-    let mut s = format!("partition over {ranks} ranks (METIS k-way on the element dual graph, seed 0):\n  edge cut: {} faces\n  imbalance: {:.3} (max/mean elements)\n", q.edge_cut, q.imbalance);
+    let mut s = format!("partition over {ranks} ranks ({}):\n  edge cut: {} faces\n  imbalance: {:.3} (max/mean elements)\n", def.partition.describe(), q.edge_cut, q.imbalance);
     for r in 0..ranks {
         s.push_str(&format!(
             "  rank {r}: {} elements, {} owned nodes ({} unknowns), {} ghost nodes\n",
@@ -616,9 +619,11 @@ pub fn partition(target: &str, ranks: usize, dir: &std::path::Path) -> Result<St
     }
     let src = crate::scene::load(target)?;
     let Scene { model: def, run } = crate::scene::read(&src)?;
-    let part = crate::partition::partition_elements(&def.mesh, ranks)?;
+    let edges = def.coupling_edges();
+    let req = def.partition_request(&edges);
+    let part = req.compute(ranks)?;
     let file = cache::path(dir, &run.name, ranks);
-    cache::write(&file, &def.mesh, ranks, &part)?;
+    cache::write(&file, &req, ranks, &part)?;
     Ok(format!(
         "wrote {}\n{}",
         file.display(),

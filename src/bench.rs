@@ -79,7 +79,7 @@ pub(crate) fn generated_model(comm: &dyn Comm, text: String, label: &str) -> Res
             label: label.into(),
         };
         let def = crate::scene::read(&src)?.model;
-        let part = partition_elements(&def.mesh, p)?;
+        let part = partition_elements(&def.mesh, p, def.partition, &def.coupling_edges())?;
         Ok(distribute::split(&def, &part, p))
     })?;
     let local = distribute::scatter(comm, pieces)?;

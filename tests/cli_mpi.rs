@@ -879,3 +879,67 @@ fn sliding_block_contact_split_between_ranks_same_on_one_and_two() {
         assert!(h[0].iter().any(|x| x == c), "history lacks {c}");
     }
 }
+
+/// The distributing coupling with its coupled nodes on both ranks (the built-in scene
+/// is split in slabs across the width): the reference point is owned by one rank and
+/// read by both, the multiplier rows are summed over ranks. 1 and 2 ranks give the
+/// same displacements, reactions, reference-point motion and loads, and the same
+/// Newton iteration counts.
+#[test]
+fn coupled_cantilever_same_on_one_and_two_ranks_with_the_tip_face_split() {
+    let dir = temp_dir("rank-coupling");
+    let check = ok(alfe(
+        &dir,
+        1,
+        &["check", "coupled-cantilever", "--ranks", "2"],
+    ));
+    assert!(
+        check.contains("coupling tip: nodes owned by rank(s) 0,1"),
+        "{check}"
+    );
+    ok(alfe(
+        &dir,
+        1,
+        &["run", "coupled-cantilever", "--out", "r1", "--quiet"],
+    ));
+    ok(alfe(
+        &dir,
+        2,
+        &[
+            "run",
+            "coupled-cantilever",
+            "--out",
+            "r2",
+            "--partitions",
+            "parts",
+            "--quiet",
+        ],
+    ));
+    let (a, b) = (dir.join("r1"), dir.join("r2"));
+    assert_same_runs(&a, &b, "coupled-cantilever");
+    let (ha, hb) = (
+        history(&a.join("history.csv")),
+        history(&b.join("history.csv")),
+    );
+    let column = |h: &Vec<Vec<String>>, name: &str| -> Vec<f64> {
+        let i = h[0].iter().position(|c| c == name).unwrap();
+        h[1..].iter().map(|r| r[i].parse().unwrap()).collect()
+    };
+    // Each vector (displacement, rotation, force, moment) against its largest component.
+    for v in ["u", "r", "f", "m"] {
+        let names: Vec<String> = ["x", "y", "z"]
+            .iter()
+            .map(|c| format!("tip.{v}{c}"))
+            .collect();
+        let scale = names
+            .iter()
+            .flat_map(|n| column(&ha, n))
+            .fold(0.0f64, |m, x| m.max(x.abs()));
+        assert!(scale > 0.0, "tip.{v}* is zero");
+        for n in &names {
+            for (x, y) in column(&ha, n).iter().zip(column(&hb, n)) {
+                assert!((x - y).abs() <= 1e-8 * scale, "{n}: {x} vs {y}");
+            }
+        }
+    }
+}

@@ -6,47 +6,6 @@ mod common;
 use alfe::parallel::SerialComm;
 use common::*;
 
-/// Max over columns of ‖K e_j − (r(u + ε e_j) − r(u − ε e_j))/2ε‖ / ‖K‖_max, at a
-/// perturbed state of a converged run (so nodes sit in several branches of the law).
-fn jacobian_fd_error(out: &mut alfe::app::RunOutcome, seed: u64, amp: f64) -> f64 {
-    let comm = SerialComm;
-    let n = out.u.len();
-    let mut s = seed;
-    let mut rnd = || {
-        s = s
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        ((s >> 11) as f64 / (1u64 << 53) as f64) - 0.5
-    };
-    let u: Vec<f64> = out.u.iter().map(|&x| x + amp * rnd()).collect();
-    let t = out.steps.last().unwrap().time;
-    let mut k = out.model.new_matrix(&comm);
-    out.model.jacobian(&comm, &u, t, &mut k).unwrap();
-    let (mut worst, mut scale) = (0.0f64, 0.0f64);
-    let eps = 1e-7;
-    let mut rp = vec![0.0; n];
-    let mut rm = vec![0.0; n];
-    let mut e = vec![0.0; n];
-    let mut ke = vec![0.0; n];
-    for j in 0..n {
-        e.iter_mut().for_each(|x| *x = 0.0);
-        e[j] = 1.0;
-        k.spmv(&comm, &e, &mut ke);
-        let mut up = u.clone();
-        up[j] += eps;
-        out.model.residual(&comm, &up, t, &mut rp).unwrap();
-        let mut um = u.clone();
-        um[j] -= eps;
-        out.model.residual(&comm, &um, t, &mut rm).unwrap();
-        for i in 0..n {
-            let fd = (rp[i] - rm[i]) / (2.0 * eps);
-            worst = worst.max((fd - ke[i]).abs());
-            scale = scale.max(ke[i].abs());
-        }
-    }
-    worst / scale
-}
-
 fn small_sliding_block(method: &str) -> String {
     let d = builtin("sliding-block");
     let d = edit(&d, "cells = [8, 4, 4]", "cells = [2, 1, 1]");
@@ -70,21 +29,6 @@ fn contact_jacobian_matches_finite_differences() {
             );
         }
     }
-}
-
-/// A column of a run's history by name.
-fn column(out: &alfe::app::RunOutcome, name: &str) -> Vec<f64> {
-    let path = std::path::Path::new(&out.summary.output_dir).join("history.csv");
-    let text = std::fs::read_to_string(&path).unwrap();
-    let mut lines = text.lines();
-    let head: Vec<&str> = lines.next().unwrap().split(',').collect();
-    let i = head
-        .iter()
-        .position(|c| *c == name)
-        .unwrap_or_else(|| panic!("no column {name} in {head:?}"));
-    lines
-        .map(|l| l.split(',').nth(i).unwrap().parse().unwrap())
-        .collect()
 }
 
 const PATCH: &str = r#"

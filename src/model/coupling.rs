@@ -451,8 +451,9 @@ impl Contribution for Coupling {
         for a in 0..3 {
             out[a] = u[0][a];
             out[3 + a] = u[1][a] / l;
-            out[6 + a] = -self.kappa * lam[0][a];
-            out[9 + a] = -self.kappa * lam[1][a] * l;
+            // (+ 0.0: no negative zeros in the history.)
+            out[6 + a] = -self.kappa * lam[0][a] + 0.0;
+            out[9 + a] = -self.kappa * lam[1][a] * l + 0.0;
         }
     }
     fn summary(&self, v: &[f64]) -> Option<SummaryEntry> {

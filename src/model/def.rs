@@ -150,6 +150,8 @@ pub struct ModelDef {
     /// Loads, walls, couplings: everything else the model is made of, in deck order by
     /// kind (global node numbers).
     pub contributions: Vec<ContributionDef>,
+    /// How the elements are split over ranks.
+    pub partition: crate::partition::Method,
 }
 
 impl ModelDef {
@@ -159,6 +161,26 @@ impl ModelDef {
     }
     pub fn elem_formulation(&self, e: usize) -> Formulation {
         self.part_formulation[self.mesh.elem_part[e] as usize]
+    }
+    /// What its partition is computed from, with its `edges` ([`Self::coupling_edges`]).
+    pub fn partition_request<'a>(
+        &'a self,
+        edges: &'a [(usize, usize)],
+    ) -> crate::partition::Request<'a> {
+        crate::partition::Request {
+            mesh: &self.mesh,
+            edges,
+            method: self.partition,
+        }
+    }
+    /// The element couplings of the contributions' stencils (partition graph edges).
+    pub fn coupling_edges(&self) -> Vec<(usize, usize)> {
+        let stencils: Vec<Vec<usize>> = self
+            .contributions
+            .iter()
+            .flat_map(|c| c.kind().stencils())
+            .collect();
+        crate::partition::stencil_edges(&self.mesh, &stencils)
     }
 }
 

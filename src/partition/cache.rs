@@ -1,8 +1,8 @@
 //! The partition cache: `DIR/<scene>.<ranks>.part`, a small text file whose header
-//! records the mesh hash, so a file made for another mesh is refused, never used.
+//! records the hash of the mesh (with its couplings and the partition method), so a file
+//! made for another mesh is refused, never used.
 
-use super::partition_elements;
-use crate::mesh::Mesh;
+use super::Request;
 use crate::{Error, Result};
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -22,7 +22,7 @@ pub fn path(dir: &Path, scene: &str, ranks: usize) -> PathBuf {
 }
 
 /// Write a partition file (creating `dir`).
-pub fn write(file: &Path, mesh: &Mesh, ranks: usize, part: &[u32]) -> Result<()> {
+pub fn write(file: &Path, req: &Request, ranks: usize, part: &[u32]) -> Result<()> {
     if let Some(d) = file.parent() {
         std::fs::create_dir_all(d)
             .map_err(|e| Error::runtime(format!("cannot create `{}`: {e}", d.display())))?;
@@ -30,8 +30,8 @@ pub fn write(file: &Path, mesh: &Mesh, ranks: usize, part: &[u32]) -> Result<()>
     let mut s = String::with_capacity(part.len() * 3 + 128);
     s.push_str(&format!(
         "alfe-partition 1\nranks {ranks}\nelements {}\nmesh-hash {:016x}\n",
-        mesh.n_elems(),
-        mesh.hash()
+        req.mesh.n_elems(),
+        req.key()
     ));
     for p in part {
         s.push_str(&p.to_string());
@@ -46,7 +46,8 @@ pub fn write(file: &Path, mesh: &Mesh, ranks: usize, part: &[u32]) -> Result<()>
 }
 
 /// Read a partition file, refusing one made for another mesh or rank count.
-pub fn read(file: &Path, mesh: &Mesh, ranks: usize) -> Result<Vec<u32>> {
+pub fn read(file: &Path, req: &Request, ranks: usize) -> Result<Vec<u32>> {
+    let mesh = req.mesh;
     let text = std::fs::read_to_string(file).map_err(|e| {
         Error::input(format!(
             "cannot read partition file `{}`: {e}",
@@ -80,7 +81,7 @@ pub fn read(file: &Path, mesh: &Mesh, ranks: usize) -> Result<Vec<u32>> {
         .parse()
         .map_err(|_| bad("has an unreadable element count".into()))?;
     let hash = header("mesh-hash")?;
-    let want = format!("{:016x}", mesh.hash());
+    let want = format!("{:016x}", req.key());
     if r != ranks {
         return Err(bad(format!("is for {r} ranks, not {ranks}")));
     }
@@ -109,22 +110,22 @@ pub enum Origin {
 }
 
 /// Use the cached partition if there is one (refusing a stale one unless
-/// `repartition`), otherwise compute it with METIS and cache it.
+/// `repartition`), otherwise compute it and cache it.
 pub fn get(
     dir: &Path,
     scene: &str,
-    mesh: &Mesh,
+    req: &Request,
     ranks: usize,
     repartition: bool,
 ) -> Result<(Vec<u32>, Origin, PathBuf)> {
     let file = path(dir, scene, ranks);
     if ranks <= 1 {
-        return Ok((vec![0; mesh.n_elems()], Origin::Trivial, file));
+        return Ok((vec![0; req.mesh.n_elems()], Origin::Trivial, file));
     }
     if file.exists() && !repartition {
-        return Ok((read(&file, mesh, ranks)?, Origin::Cache, file));
+        return Ok((read(&file, req, ranks)?, Origin::Cache, file));
     }
-    let part = partition_elements(mesh, ranks)?;
-    write(&file, mesh, ranks, &part)?;
+    let part = req.compute(ranks)?;
+    write(&file, req, ranks, &part)?;
     Ok((part, Origin::Computed, file))
 }

@@ -1,11 +1,106 @@
-//! Partitioning: METIS on the element dual graph (fixed seed, so the same mesh and rank
-//! count always give the same partition), a cache of partitions in `partitions/` keyed by
-//! a hash of the mesh, and the split of a model into per-rank pieces ([`distribute`]).
+//! Partitioning: METIS on the element coupling graph (the dual graph of shared faces,
+//! plus the edges of contribution stencils; fixed seed, so the same mesh, couplings and
+//! rank count always give the same partition), or slabs along an axis when the deck asks
+//! (LS-DYNA's decomposition along a direction); ownership of nodes; and a cache of
+//! partitions in `partitions/` keyed by a hash of the mesh and its couplings. It knows
+//! the mesh and a list of element couplings, not what made them.
 
 pub mod cache;
 
 use crate::mesh::{ElemKind, Mesh};
 use crate::{Error, Result};
+use serde::{Deserialize, Serialize};
+
+/// How elements are split over ranks.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+pub enum Method {
+    /// METIS k-way on the coupling graph (fewest cut faces, balanced elements).
+    #[default]
+    Metis,
+    /// Equal slabs of elements along an axis (0, 1, 2 = x, y, z) by element centroid:
+    /// for steering where the cuts go (a model that must be split across a surface).
+    Slabs { axis: usize },
+}
+
+impl Method {
+    pub fn describe(self) -> String {
+        match self {
+            Method::Metis => "METIS k-way on the element dual graph, seed 0".into(),
+            Method::Slabs { axis } => {
+                format!("slabs along {} by element centroid", ["x", "y", "z"][axis])
+            }
+        }
+    }
+}
+
+/// What a partition is computed from: the mesh, the element couplings beyond shared
+/// faces, and the method.
+#[derive(Debug, Clone, Copy)]
+pub struct Request<'a> {
+    pub mesh: &'a Mesh,
+    pub edges: &'a [(usize, usize)],
+    pub method: Method,
+}
+
+impl Request<'_> {
+    /// The partition over `ranks`.
+    pub fn compute(&self, ranks: usize) -> Result<Vec<u32>> {
+        partition_elements(self.mesh, ranks, self.method, self.edges)
+    }
+
+    /// The cache key: the mesh's hash, folded with the couplings and the method when
+    /// they are not the defaults (so plain meshes keep their keys).
+    pub fn key(&self) -> u64 {
+        let mut h = self.mesh.hash();
+        if self.edges.is_empty() && self.method == Method::Metis {
+            return h;
+        }
+        let mut eat = |x: u64| {
+            for b in x.to_le_bytes() {
+                h ^= b as u64;
+                h = h.wrapping_mul(0x100000001b3);
+            }
+        };
+        for &(a, b) in self.edges {
+            eat(a as u64);
+            eat(b as u64);
+        }
+        eat(match self.method {
+            Method::Metis => u64::MAX,
+            Method::Slabs { axis } => axis as u64,
+        });
+        h
+    }
+}
+
+/// Element pairs coupled by node stencils (a contribution that evaluates nodes of
+/// several elements together): each stencil's first node's element with each other
+/// node's element (the first element holding a node stands for it).
+pub fn stencil_edges(mesh: &Mesh, stencils: &[Vec<usize>]) -> Vec<(usize, usize)> {
+    if stencils.is_empty() {
+        return Vec::new();
+    }
+    let mut elem_of = vec![usize::MAX; mesh.n_nodes()];
+    for e in (0..mesh.n_elems()).rev() {
+        for &n in mesh.elem_nodes(e) {
+            elem_of[n] = e;
+        }
+    }
+    let mut edges: Vec<(usize, usize)> = Vec::new();
+    for s in stencils {
+        let Some(&first) = s.first() else { continue };
+        let a = elem_of[first];
+        for &n in &s[1..] {
+            let b = elem_of[n];
+            if a != b && a != usize::MAX && b != usize::MAX {
+                edges.push((a.min(b), a.max(b)));
+            }
+        }
+    }
+    edges.sort_unstable();
+    edges.dedup();
+    edges
+}
 
 /// The element dual graph in CSR form: elements sharing a face are neighbours
 /// (4 common nodes for an all-hex mesh, 3 as soon as there are tets).
@@ -22,8 +117,14 @@ pub fn dual_graph(mesh: &Mesh) -> Result<(Vec<i32>, Vec<i32>)> {
     Ok((dual.xadj().to_vec(), dual.adjncy().to_vec()))
 }
 
-/// Element → rank, from METIS k-way on the dual graph with seed 0.
-pub fn partition_elements(mesh: &Mesh, nparts: usize) -> Result<Vec<u32>> {
+/// Element → rank: METIS k-way on the dual graph plus the coupling `edges` (seed 0),
+/// or slabs along an axis.
+pub fn partition_elements(
+    mesh: &Mesh,
+    nparts: usize,
+    method: Method,
+    edges: &[(usize, usize)],
+) -> Result<Vec<u32>> {
     let ne = mesh.n_elems();
     if nparts <= 1 {
         return Ok(vec![0; ne]);
@@ -33,7 +134,10 @@ pub fn partition_elements(mesh: &Mesh, nparts: usize) -> Result<Vec<u32>> {
             "cannot split {ne} elements over {nparts} ranks: use fewer ranks"
         )));
     }
-    let (xadj, adjncy) = dual_graph(mesh)?;
+    if let Method::Slabs { axis } = method {
+        return Ok(slabs(mesh, nparts, axis));
+    }
+    let (xadj, adjncy) = with_edges(dual_graph(mesh)?, edges);
     let mut part = vec![0i32; ne];
     let g = metis::Graph::new(1, nparts as i32, &xadj, &adjncy)
         .map_err(|e| Error::runtime(format!("METIS graph: {e}")))?;
@@ -41,6 +145,51 @@ pub fn partition_elements(mesh: &Mesh, nparts: usize) -> Result<Vec<u32>> {
         .part_kway(&mut part)
         .map_err(|e| Error::runtime(format!("METIS k-way partition: {e}")))?;
     Ok(part.into_iter().map(|p| p as u32).collect())
+}
+
+/// The CSR graph with the extra undirected `edges` added (none: unchanged).
+fn with_edges(
+    (xadj, adjncy): (Vec<i32>, Vec<i32>),
+    edges: &[(usize, usize)],
+) -> (Vec<i32>, Vec<i32>) {
+    if edges.is_empty() {
+        return (xadj, adjncy);
+    }
+    let n = xadj.len() - 1;
+    let mut adj: Vec<Vec<i32>> = (0..n)
+        .map(|e| adjncy[xadj[e] as usize..xadj[e + 1] as usize].to_vec())
+        .collect();
+    for &(a, b) in edges {
+        adj[a].push(b as i32);
+        adj[b].push(a as i32);
+    }
+    let mut x = vec![0i32];
+    let mut out = Vec::new();
+    for (e, mut l) in adj.into_iter().enumerate() {
+        l.sort_unstable();
+        l.dedup();
+        l.retain(|&k| k as usize != e);
+        out.extend(l);
+        x.push(out.len() as i32);
+    }
+    (x, out)
+}
+
+/// Equal slabs of elements by centroid coordinate along `axis` (ties by element
+/// number, so the split is deterministic).
+fn slabs(mesh: &Mesh, nparts: usize, axis: usize) -> Vec<u32> {
+    let ne = mesh.n_elems();
+    let centroid = |e: usize| {
+        let nodes = mesh.elem_nodes(e);
+        nodes.iter().map(|&n| mesh.coords[n][axis]).sum::<f64>() / nodes.len() as f64
+    };
+    let mut order: Vec<(f64, usize)> = (0..ne).map(|e| (centroid(e), e)).collect();
+    order.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+    let mut part = vec![0u32; ne];
+    for (k, &(_, e)) in order.iter().enumerate() {
+        part[e] = (k * nparts / ne) as u32;
+    }
+    part
 }
 
 /// Partition quality as `alfe check --ranks N` prints it.
@@ -137,8 +286,8 @@ mod tests {
     #[test]
     fn metis_is_deterministic_and_balanced() {
         let m = bar();
-        let a = partition_elements(&m, 2).unwrap();
-        let b = partition_elements(&m, 2).unwrap();
+        let a = partition_elements(&m, 2, Method::Metis, &[]).unwrap();
+        let b = partition_elements(&m, 2, Method::Metis, &[]).unwrap();
         assert_eq!(a, b);
         let q = quality(&m, &a, 2).unwrap();
         assert!(q.imbalance < 1.1, "{q:?}");
@@ -159,6 +308,32 @@ mod tests {
             },
             0,
         );
-        assert!(partition_elements(&m, 2).is_err());
+        assert!(partition_elements(&m, 2, Method::Metis, &[]).is_err());
+    }
+
+    /// Slabs across the bar's width put each cross-section on both ranks; coupling
+    /// edges pull coupled elements onto one rank.
+    #[test]
+    fn slabs_and_coupling_edges() {
+        let m = bar();
+        let p = partition_elements(&m, 2, Method::Slabs { axis: 1 }, &[]).unwrap();
+        let q = quality(&m, &p, 2).unwrap();
+        assert_eq!(q.elements_per_rank, vec![32, 32]);
+        for (e, &r) in p.iter().enumerate() {
+            let y: f64 = m.elem_nodes(e).iter().map(|&n| m.coords[n][1]).sum::<f64>() / 8.0;
+            assert_eq!(r, (y > 0.5) as u32);
+        }
+        // Without edges METIS cuts the bar in the middle: its two end elements are on
+        // different ranks; strong coupling edges between the ends keep them together.
+        let a = partition_elements(&m, 2, Method::Metis, &[]).unwrap();
+        let (first, last) = (0, m.n_elems() - 1);
+        assert_ne!(a[first], a[last]);
+        let ends: Vec<Vec<usize>> = (0..4)
+            .map(|k| vec![m.elem_nodes(k)[0], m.elem_nodes(m.n_elems() - 1 - k)[6]])
+            .collect();
+        let edges = stencil_edges(&m, &ends);
+        assert!(!edges.is_empty());
+        let b = partition_elements(&m, 2, Method::Metis, &edges).unwrap();
+        assert_eq!(b[first], b[last], "coupled ends on one rank");
     }
 }

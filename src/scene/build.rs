@@ -527,7 +527,26 @@ pub fn build(deck: &Deck, deck_dir: &Path) -> Result<Scene> {
         loads.into_iter().map(ContributionDef::Load).collect();
     contributions.extend(walls.into_iter().map(ContributionDef::Wall));
     contributions.extend(couplings.into_iter().map(ContributionDef::Coupling));
+    let partition = match &deck.partition {
+        None => crate::partition::Method::Metis,
+        Some(p) => match (p.method, p.axis) {
+            (PartitionMethodDeck::Metis, None) => crate::partition::Method::Metis,
+            (PartitionMethodDeck::Slabs, Some(a)) => {
+                crate::partition::Method::Slabs { axis: a as usize }
+            }
+            (PartitionMethodDeck::Metis, Some(_)) => {
+                return Err(err("partition.axis", "only for method = \"slabs\""))
+            }
+            (PartitionMethodDeck::Slabs, None) => {
+                return Err(err(
+                    "partition.axis",
+                    "method = \"slabs\" needs an axis: \"x\", \"y\" or \"z\"",
+                ))
+            }
+        },
+    };
     let model = ModelDef {
+        partition,
         contributions,
         mesh,
         part_names: deck.parts.iter().map(|p| p.name.clone()).collect(),

@@ -38,6 +38,27 @@ pub struct Deck {
     /// Distributing couplings (a reference point tied to nodes, RBE3).
     #[serde(default)]
     pub couplings: Vec<super::coupling::CouplingDeck>,
+    /// How the elements are split over ranks (default METIS).
+    #[serde(default)]
+    pub partition: Option<PartitionDeck>,
+}
+
+/// `[partition]`: `method = "metis"` (default: fewest cut faces) or `"slabs"` with
+/// `axis = "x" | "y" | "z"` (equal slabs of elements along that axis, LS-DYNA's
+/// decomposition along a direction: for steering where the cuts go).
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct PartitionDeck {
+    pub method: PartitionMethodDeck,
+    #[serde(default)]
+    pub axis: Option<Comp>,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum PartitionMethodDeck {
+    Metis,
+    Slabs,
 }
 
 /// An initial velocity on a part or a node set (exactly one of `part`, `set`).

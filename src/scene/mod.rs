@@ -109,6 +109,11 @@ pub const BUILTIN: &[(&str, &str, &str)] = &[
         include_str!("scenes/clip-tensile.toml"),
     ),
     (
+        "coupled-cantilever",
+        "cantilever loaded by a force, then a moment, through a distributing coupling (RBE3) at its tip",
+        include_str!("scenes/coupled-cantilever.toml"),
+    ),
+    (
         "hertz-sphere",
         "rigid sphere R = 50 mm pressed 1 mm into an elastic block, frictionless (Hertz)",
         include_str!("scenes/hertz-sphere.toml"),
