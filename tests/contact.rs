@@ -3,7 +3,6 @@
 //! block, initial penetration).
 
 mod common;
-use alfe::parallel::SerialComm;
 use common::*;
 
 fn small_sliding_block(method: &str) -> String {
