@@ -22,24 +22,31 @@
 //! coupling (`model/coupling.rs`, `scene/coupling.rs`) is the worked example:
 //!
 //! 1. **Definition** (serial, global node numbers): a serde type with what the deck says
-//!    (`CouplingDef`: the coupled nodes and weights, the reference point, its DOFs'
-//!    curves). Register it as a variant of [`super::def::ContributionDef`] and give it
-//!    `localize` (this rank's share, local node indices: the coupling keeps the coupled
-//!    nodes the rank owns, and every rank agrees on which rank owns the reference point),
-//!    `stencils` (nodes that must sit on one rank: none for the coupling, whose nodes
-//!    reach it through its global unknowns) and `build`.
-//! 2. **Runtime**: a struct implementing [`Contribution`]. The coupling declares two
-//!    global blocks for the reference point and two for its constraint multipliers,
-//!    owned by the rank with most of the coupled weight and read by every rank with
-//!    coupled nodes; `evaluate` adds κ Cᵢᵀλ to its nodes' rows and κ Cᵢ uᵢ to the
+//!    (`CouplingDef`: the coupled nodes and weights, the reference point, each DOF free
+//!    with an optional load curve or prescribed by a curve, the set's centroid and
+//!    inertia). Implement [`super::kind::ContributionKind`] for it: `localize` gives one
+//!    rank's share with local node indices (the coupling keeps the coupled nodes the
+//!    rank owns, and every rank agrees that the reference point belongs to the rank with
+//!    most of the coupled weight), `stencils` lists nodes that must be evaluated
+//!    together on one rank (none for the coupling: its nodes reach it through its
+//!    global unknowns; a node-to-face pair would list its node and the face's nodes, and
+//!    the face's nodes become ghosts there), `build` makes the runtime contribution.
+//!    Register it with one line in `def.rs` (`Coupling(super::coupling::CouplingDef)`).
+//! 2. **Runtime**: a struct implementing [`Contribution`]. The coupling declares four
+//!    global blocks (the point's translation and rotation, and their multipliers) owned
+//!    by that rank and read by every rank with coupled nodes ([`Unknowns`]); `bind`
+//!    learns their global and local blocks; `pattern` lists node–multiplier and
+//!    point–multiplier blocks; `evaluate` adds κCᵢᵀλ to its nodes' rows and κCᵢuᵢ to the
 //!    multiplier rows (partial sums: the ghost summation completes them on the owner),
-//!    and the owner adds the reference point's rows; `prescribed` returns the driven
-//!    DOFs; `columns` publishes `tip.ux … tip.mz`.
-//! 3. **Deck section**: a `[[couplings]]` table in `scene/deck.rs` and its validation in
-//!    `scene/coupling.rs`, which turns it into the definition (errors name the field).
+//!    and the owner adds the point's rows and its applied load; `prescribed` returns the
+//!    driven DOFs; `columns` publishes `tip.ux … tip.mz`, `summary` a `couplings` entry,
+//!    `grids` the point for ParaView.
+//! 3. **Deck section**: a `[[couplings]]` table (`scene/deck.rs`) validated in
+//!    `scene/coupling.rs`, which resolves names and curves into the definition; errors
+//!    name the field.
 //!
-//! Nothing else changes: the partition graph, the ghost sets, the matrix pattern, the
-//! solvers and the output read the list.
+//! Nothing else changes: the unknown map, the partition graph, the ghost sets, the
+//! matrix pattern, the solvers, the output and `alfe check` read the list.
 
 use super::dofs::{DofMap, Unknowns};
 use crate::linalg::DistMatrix;

@@ -42,9 +42,9 @@
 use super::contribution::{
     Column, Contribution, Evaluation, GridSpec, Reference, State, SummaryEntry,
 };
-use super::def::{ContributionDef, ContributionKind, Localizer};
-use super::distribute::LocalModel;
 use super::dofs::{DofMap, Unknowns};
+use super::kind::{ContributionKind, Localizer};
+use super::local::{LocalElements, LocalMesh};
 use crate::curve::Curve;
 use serde::{Deserialize, Serialize};
 
@@ -192,7 +192,7 @@ impl ContributionKind for CouplingDef {
     }
     /// Each rank keeps the coupled nodes it owns; every rank agrees that the reference
     /// point belongs to the rank with most of the coupled weight (the lowest on a tie).
-    fn localize(&self, l: &Localizer) -> ContributionDef {
+    fn localize(&self, l: &Localizer) -> Self {
         let mut per_rank = vec![0.0; l.ranks];
         for (&n, &w) in self.nodes.iter().zip(&self.weights) {
             per_rank[l.owner[n] as usize] += w;
@@ -204,19 +204,15 @@ impl ContributionKind for CouplingDef {
             .zip(&self.weights)
             .filter_map(|(&n, &w)| l.owned(n).map(|ln| (ln, w)))
             .collect();
-        ContributionDef::Coupling(CouplingDef {
+        CouplingDef {
             nodes: mine.iter().map(|p| p.0).collect(),
             weights: mine.iter().map(|p| p.1).collect(),
             owner,
             ..self.clone()
-        })
+        }
     }
-    fn build(&self, local: &LocalModel) -> Box<dyn Contribution> {
-        Box::new(Coupling::new(
-            self.clone(),
-            &local.mesh.coords,
-            local.mesh.rank,
-        ))
+    fn build(&self, mesh: &LocalMesh, _elements: &LocalElements) -> Box<dyn Contribution> {
+        Box::new(Coupling::new(self.clone(), &mesh.coords, mesh.rank))
     }
     fn explicit_ok(&self) -> Result<(), String> {
         Err(format!(

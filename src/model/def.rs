@@ -3,6 +3,7 @@
 //! contribution definitions ([`ContributionDef`]: loads, walls, couplings) that every
 //! rank turns into its [`super::Contribution`]s.
 
+pub use super::kind::{ContributionKind, Localizer};
 use crate::fem::element::Formulation;
 use crate::material::{Hardening, J2Plasticity, LinearElastic, Material, MooneyRivlin, NeoHookean};
 use crate::mesh::{FaceRef, Mesh};
@@ -184,59 +185,6 @@ impl ModelDef {
     }
 }
 
-/// Every rank's view of the partition while it localizes a definition.
-pub struct Localizer<'a> {
-    pub rank: usize,
-    pub ranks: usize,
-    /// Owning rank of every global node (the user's numbering).
-    pub owner: &'a [u32],
-    /// This rank's local index of every global node, or `usize::MAX`.
-    pub local_of: &'a [usize],
-}
-
-impl Localizer<'_> {
-    /// The local index of a node this rank owns.
-    pub fn owned(&self, node: usize) -> Option<usize> {
-        (self.owner[node] as usize == self.rank).then(|| self.local_of[node])
-    }
-}
-
-/// What a kind of contribution definition does (see [`super::contribution`] on adding
-/// one). Definitions hold global node numbers; `localize` gives one rank's share with
-/// local node indices, which `build` turns into the runtime contribution.
-pub trait ContributionKind {
-    /// What kind it is ("wall", "coupling", ...).
-    fn kind_name(&self) -> &'static str;
-    /// Its deck name.
-    fn name(&self) -> &str;
-    /// One line for `alfe check`.
-    fn describe(&self) -> String;
-    /// The nodes it acts on (global numbers; for `alfe check`).
-    fn nodes(&self) -> Vec<usize> {
-        Vec::new()
-    }
-    /// Scalar unknowns it adds to the model (multipliers, reference-point DOFs).
-    fn extra_unknowns(&self) -> usize {
-        0
-    }
-    /// Node stencils: nodes coupled by one piece of the contribution, evaluated on the
-    /// owner of the first (global numbers). They add edges to the partition graph and
-    /// ghost nodes on the evaluating rank.
-    fn stencils(&self) -> Vec<Vec<usize>> {
-        Vec::new()
-    }
-    /// This rank's share (local node indices).
-    fn localize(&self, l: &Localizer) -> ContributionDef;
-    /// The runtime contribution on this rank, from its localized definition.
-    fn build(&self, local: &super::distribute::LocalModel) -> Box<dyn super::Contribution>;
-    /// Whether it can take part in an explicit analysis (else why not).
-    fn explicit_ok(&self) -> Result<(), String> {
-        Ok(())
-    }
-    /// `--contact alm|penalty`: switch its enforcement, if it has one.
-    fn set_contact_method(&mut self, _m: crate::contact::wall::ContactMethod) {}
-}
-
 /// Registers the kinds of contribution definitions: one line per kind.
 macro_rules! contribution_kinds {
     ($($variant:ident($ty:ty)),* $(,)?) => {
@@ -256,6 +204,12 @@ macro_rules! contribution_kinds {
             pub fn kind_mut(&mut self) -> &mut dyn ContributionKind {
                 match self {
                     $(ContributionDef::$variant(d) => d),*
+                }
+            }
+            /// This rank's share (local node indices).
+            pub fn localize(&self, l: &Localizer) -> Self {
+                match self {
+                    $(ContributionDef::$variant(d) => ContributionDef::$variant(d.localize(l))),*
                 }
             }
         }

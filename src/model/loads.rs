@@ -5,9 +5,9 @@
 //! pressure also adds its load stiffness −∂f_ext/∂u.
 
 use super::contribution::{Contribution, Evaluation};
-use super::def::{ContributionDef, ContributionKind, Localizer};
-use super::distribute::LocalModel;
 use super::dofs::DofMap;
+use super::kind::{ContributionKind, Localizer};
+use super::local::{LocalElements, LocalMesh};
 use crate::curve::Curve;
 use crate::fem::surface::{pressure_face, traction_face};
 use serde::{Deserialize, Serialize};
@@ -56,33 +56,25 @@ impl ContributionKind for LoadDef {
             } => format!("pressure {pressure} on {surface}"),
         }
     }
-    fn localize(&self, _l: &Localizer) -> ContributionDef {
-        ContributionDef::Load(self.clone())
+    fn localize(&self, _l: &Localizer) -> Self {
+        self.clone()
     }
-    fn build(&self, local: &LocalModel) -> Box<dyn Contribution> {
+    fn build(&self, mesh: &LocalMesh, elements: &LocalElements) -> Box<dyn Contribution> {
         let faces = |surface: &str| -> Vec<Vec<usize>> {
-            local
-                .mesh
-                .surfaces
+            mesh.surfaces
                 .get(surface)
                 .map(|v| v.as_slice())
                 .unwrap_or(&[])
                 .iter()
-                .map(|&(e, f)| local.elements.face_nodes(e, f))
+                .map(|&(e, f)| elements.face_nodes(e, f))
                 .collect()
         };
         match self {
             LoadDef::Nodal { set, force, curve } => {
-                let no = local.mesh.n_owned();
+                let no = mesh.n_owned();
                 Box::new(NodalLoad {
                     name: set.clone(),
-                    nodes: local
-                        .mesh
-                        .set(set)
-                        .iter()
-                        .copied()
-                        .filter(|&n| n < no)
-                        .collect(),
+                    nodes: mesh.set(set).iter().copied().filter(|&n| n < no).collect(),
                     force: *force,
                     curve: curve.clone(),
                 })

@@ -11,7 +11,9 @@ pub mod def;
 pub mod distribute;
 pub mod dofs;
 pub mod dynamics;
+pub mod kind;
 pub mod loads;
+pub mod local;
 pub mod solids;
 pub mod walls;
 
@@ -77,7 +79,7 @@ impl Model {
         let contributions: Vec<Box<dyn Contribution>> = local
             .contributions
             .iter()
-            .map(|d| d.kind().build(&local))
+            .map(|d| d.kind().build(&local.mesh, &local.elements))
             .collect();
         let LocalModel {
             mesh,

@@ -13,9 +13,9 @@ use super::contribution::{
     Center, Column, Combine, Contribution, Evaluation, FieldSpec, GridSpec, Reduce, Reference,
     State, SummaryEntry,
 };
-use super::def::{ContributionDef, ContributionKind, Localizer};
-use super::distribute::LocalModel;
 use super::dofs::{DofMap, Unknowns};
+use super::kind::{ContributionKind, Localizer};
+use super::local::{LocalElements, LocalMesh};
 use crate::contact::law::{alm, penalty};
 use crate::contact::motion::{Pose, RigidMotion};
 use crate::contact::shape::Shape;
@@ -77,7 +77,7 @@ impl ContributionKind for WallDef {
         )
     }
     /// Each rank tracks the nodes it owns (contact forces act on the node only).
-    fn localize(&self, l: &Localizer) -> ContributionDef {
+    fn localize(&self, l: &Localizer) -> Self {
         let mut mine: Vec<(usize, f64)> = self
             .nodes
             .iter()
@@ -85,14 +85,14 @@ impl ContributionKind for WallDef {
             .filter_map(|(&n, &a)| l.owned(n).map(|ln| (ln, a)))
             .collect();
         mine.sort_by_key(|p| p.0);
-        ContributionDef::Wall(WallDef {
+        WallDef {
             nodes: mine.iter().map(|p| p.0).collect(),
             areas: mine.iter().map(|p| p.1).collect(),
             ..self.clone()
-        })
+        }
     }
-    fn build(&self, local: &LocalModel) -> Box<dyn Contribution> {
-        Box::new(Wall::new(self.clone(), &local.mesh.coords))
+    fn build(&self, mesh: &LocalMesh, _elements: &LocalElements) -> Box<dyn Contribution> {
+        Box::new(Wall::new(self.clone(), &mesh.coords))
     }
     fn set_contact_method(&mut self, m: ContactMethod) {
         self.method = m;

@@ -3,11 +3,11 @@
 //! checks an analyst needs: the set exists and spans a plane or a volume (a moment must
 //! be distributable), no DOF is both loaded and prescribed, numbers are finite.
 
-use super::deck::AnalysisKind;
 use crate::curve::Curve;
 use crate::mesh::select::tributary_areas;
 use crate::mesh::{FaceRef, Mesh};
 use crate::model::coupling::{inertia, invert3, CouplingDef, Dof};
+use crate::solve::AnalysisKind;
 use crate::{Error, Result};
 use serde::de::{self, MapAccess, Visitor};
 use serde::{Deserialize, Deserializer, Serialize};
