@@ -43,8 +43,9 @@ pub struct Model {
     constraints: Vec<Constraint>,
     /// Owned constrained node dofs (owned index) with the constraint that sets them.
     constrained_owned: Vec<(usize, usize)>,
-    /// Local node dofs (owned and ghost) with a constraint.
-    n_constrained_local: usize,
+    /// Every owned prescribed unknown (supports' and contributions'), as
+    /// [`Model::prescribed`] lists them.
+    prescribed_dofs: Vec<usize>,
     /// Reaction sets (names) and their owned nodes.
     pub reaction_sets: Vec<String>,
     reaction_nodes: Vec<Vec<usize>>,
@@ -113,7 +114,6 @@ impl Model {
             .filter(|(_, &c)| c != usize::MAX)
             .map(|(d, &c)| (d, c))
             .collect();
-        let n_constrained_local = constrained.len();
         let constrained_owned = constrained
             .into_iter()
             .filter(|&(d, _)| d < n_owned_dofs)
@@ -136,7 +136,7 @@ impl Model {
             contributions,
             constraints,
             constrained_owned,
-            n_constrained_local,
+            prescribed_dofs: Vec::new(),
             reaction_sets,
             reaction_nodes,
             displacement_sets,
@@ -148,6 +148,7 @@ impl Model {
             c.bind(&model.dofs, i + 1);
         }
         model.merge_columns();
+        model.prescribed_dofs = model.prescribed(0.0).into_iter().map(|p| p.0).collect();
         let wants = model.contributions.iter().any(|c| c.wants_reference());
         if !comm.all_ok(!wants) {
             model.set_reference(comm);
@@ -633,18 +634,13 @@ impl Model {
         s[0] / s[1].max(1.0)
     }
 
+    /// Every owned prescribed unknown (the dofs of [`Model::prescribed`]).
+    pub fn prescribed_dofs(&self) -> &[usize] {
+        &self.prescribed_dofs
+    }
+
     /// Owned constrained node dofs (for `DistMatrix::constrain`).
     pub fn constrained_dofs(&self) -> Vec<usize> {
         self.constrained_owned.iter().map(|&(d, _)| d).collect()
-    }
-
-    /// Owned constrained node dofs with the index of the support that sets them.
-    pub fn constrained_owned(&self) -> &[(usize, usize)] {
-        &self.constrained_owned
-    }
-
-    /// How many local (owned + ghost) node dofs are constrained.
-    pub fn n_constrained_local(&self) -> usize {
-        self.n_constrained_local
     }
 }

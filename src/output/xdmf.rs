@@ -280,7 +280,7 @@ fn mesh_grid(
 pub fn xdmf_text_with_grids(
     mesh: &XdmfMesh,
     steps: &[XdmfStep],
-    walls: &[XdmfGrid],
+    grids: &[XdmfGrid],
 ) -> Result<String> {
     for a in mesh
         .static_cell_attrs
@@ -295,7 +295,7 @@ pub fn xdmf_text_with_grids(
             s.time
         )));
     }
-    for w in walls {
+    for w in grids {
         if w.points_paths.len() != steps.len() {
             return Err(Error::runtime(format!(
                 "XDMF grid '{}': points for {} steps, there are {}",
@@ -326,7 +326,7 @@ pub fn xdmf_text_with_grids(
     );
     for (i, s) in steps.iter().enumerate() {
         let name = format!("step_{i:06}");
-        if walls.is_empty() {
+        if grids.is_empty() {
             mesh_grid(&mut out, "", &name, Some(s.time), mesh, s);
             continue;
         }
@@ -336,7 +336,7 @@ pub fn xdmf_text_with_grids(
         );
         let _ = writeln!(out, "        <Time Value=\"{:?}\"/>", s.time);
         mesh_grid(&mut out, "  ", "mesh", None, mesh, s);
-        for w in walls {
+        for w in grids {
             let _ = writeln!(
                 out,
                 "        <Grid Name=\"{}\" GridType=\"Uniform\">",

@@ -68,7 +68,7 @@ pub fn run_explicit(
     let mut tot = RunTotals::default();
     let mut t0 = Instant::now();
     let mut is_c = vec![false; n];
-    for (d, _) in model.prescribed(0.0) {
+    for &d in model.prescribed_dofs() {
         is_c[d] = true;
     }
     // Algebraic unknowns are held: ALM walls act kinematically here.

@@ -61,7 +61,7 @@ pub fn support_forces(
         r[i] += f_int[i] - f_ext[i];
     }
     let mut g = f_ext.to_vec();
-    for (d, _) in model.prescribed(0.0) {
+    for &d in model.prescribed_dofs() {
         g[d] += r[d];
     }
     (r, g)
