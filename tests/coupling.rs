@@ -163,6 +163,18 @@ fn bad_coupling_decks_name_the_field() {
             "couplings[0].force",
         ),
     ];
+    // History columns `<name>.fx` may not collide with a reaction set's.
+    let clash = edit(
+        &edit(
+            &base,
+            "[[surfaces]]",
+            "[[node_sets]]\nname = \"tip\"\ngroup = \"xmax\"\n\n[[surfaces]]",
+        ),
+        "reactions = [\"clamp\"]",
+        "reactions = [\"clamp\", \"tip\"]",
+    );
+    let mut cases = cases.to_vec();
+    cases.push((clash, "couplings[0].name"));
     for (deck, field) in cases {
         let e = try_run_deck("bad-coupling", &deck)
             .err()

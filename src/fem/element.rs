@@ -209,21 +209,15 @@ pub fn char_length(kind: ElemKind, x0: &[[f64; 3]]) -> f64 {
 /// element is squashed. `None` for an inverted or degenerate configuration.
 pub fn thickness(kind: ElemKind, x: &[[f64; 3]]) -> Option<f64> {
     let v = element_volume(kind, x);
-    let sub = |a: [f64; 3], b: [f64; 3]| [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
-    let cross_norm = |a: [f64; 3], b: [f64; 3]| {
-        let c = [
-            a[1] * b[2] - a[2] * b[1],
-            a[2] * b[0] - a[0] * b[2],
-            a[0] * b[1] - a[1] * b[0],
-        ];
-        (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt()
-    };
+    let mut corners = [[0.0; 3]; 4];
     let amax = kind
         .faces()
         .iter()
-        .map(|f| match f.len() {
-            4 => 0.5 * cross_norm(sub(x[f[2]], x[f[0]]), sub(x[f[3]], x[f[1]])),
-            _ => 0.5 * cross_norm(sub(x[f[1]], x[f[0]]), sub(x[f[2]], x[f[0]])),
+        .map(|f| {
+            for (c, &i) in corners.iter_mut().zip(f.iter()) {
+                *c = x[i];
+            }
+            crate::mesh::select::face_area(&corners[..f.len()])
         })
         .fold(0.0, f64::max);
     let t = v / amax;

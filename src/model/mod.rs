@@ -447,6 +447,24 @@ impl Model {
         }
     }
 
+    /// Collective: the converged state the contributions publish from (`u_local` holds
+    /// the gathered unknowns).
+    fn state<'a>(
+        &'a self,
+        comm: &dyn Comm,
+        u_owned: &[f64],
+        t: f64,
+        u_local: &'a mut Vec<f64>,
+    ) -> State<'a> {
+        self.dofs.gather(comm, u_owned, u_local);
+        State {
+            t,
+            coords: &self.mesh.coords,
+            dofs: &self.dofs,
+            u: u_local,
+        }
+    }
+
     /// The contributions' history columns (the same on every rank).
     pub fn columns(&self) -> &[Column] {
         &self.columns
@@ -459,13 +477,7 @@ impl Model {
             return Vec::new();
         }
         let mut u_local = Vec::new();
-        self.dofs.gather(comm, u_owned, &mut u_local);
-        let s = State {
-            t,
-            coords: &self.mesh.coords,
-            dofs: &self.dofs,
-            u: &u_local,
-        };
+        let s = self.state(comm, u_owned, t, &mut u_local);
         let mut values = vec![0.0; self.columns.len()];
         let mut seen = vec![false; self.columns.len()];
         for (c, map) in self.each_ref().zip(&self.column_map) {
@@ -530,13 +542,7 @@ impl Model {
     /// combines entry by entry.
     pub fn fields(&self, comm: &dyn Comm, u_owned: &[f64], t: f64) -> Vec<Field> {
         let mut u_local = Vec::new();
-        self.dofs.gather(comm, u_owned, &mut u_local);
-        let s = State {
-            t,
-            coords: &self.mesh.coords,
-            dofs: &self.dofs,
-            u: &u_local,
-        };
+        let s = self.state(comm, u_owned, t, &mut u_local);
         let rows = |spec: &FieldSpec| match spec.center {
             contribution::Center::Node => self.mesh.n_owned(),
             contribution::Center::Cell => self.solids.len(),

@@ -23,10 +23,11 @@ fn err(field: impl std::fmt::Display, msg: impl std::fmt::Display) -> Error {
     Error::input(format!("{field}: {msg}"))
 }
 
-fn unique_names<'a>(what: &str, names: impl Iterator<Item = &'a str>) -> Result<()> {
+/// Every name of a list non-empty and used once (errors name `<what>[i].name`).
+pub(super) fn unique_names<'a>(what: &str, names: impl Iterator<Item = &'a str>) -> Result<()> {
     let mut seen = BTreeSet::new();
     for (i, n) in names.enumerate() {
-        if n.is_empty() {
+        if n.trim().is_empty() {
             return Err(err(
                 format!("{what}[{i}].name"),
                 "expected a non-empty name",
@@ -523,6 +524,34 @@ pub fn build(deck: &Deck, deck_dir: &Path) -> Result<Scene> {
             analysis: deck.analysis.kind,
         },
     )?;
+    // Walls and couplings name history columns (`<name>.fx`), as reaction and
+    // displacement sets do: a name may stand for one of them only.
+    let mut column_owner: BTreeMap<&str, String> = BTreeMap::new();
+    for s in reaction_sets.iter().chain(&deck.output.displacements) {
+        column_owner.insert(s, "a node set of [output]".to_string());
+    }
+    for (i, w) in deck.walls.iter().enumerate() {
+        if let Some(o) = column_owner.insert(&w.name, format!("walls[{i}]")) {
+            return Err(err(
+                format!("walls[{i}].name"),
+                format!(
+                    "`{}` is also the name of {o}: their history columns would collide",
+                    w.name
+                ),
+            ));
+        }
+    }
+    for (i, c) in deck.couplings.iter().enumerate() {
+        if let Some(o) = column_owner.insert(&c.name, format!("couplings[{i}]")) {
+            return Err(err(
+                format!("couplings[{i}].name"),
+                format!(
+                    "`{}` is also the name of {o}: their history columns would collide",
+                    c.name
+                ),
+            ));
+        }
+    }
     let mut contributions: Vec<ContributionDef> =
         loads.into_iter().map(ContributionDef::Load).collect();
     contributions.extend(walls.into_iter().map(ContributionDef::Wall));

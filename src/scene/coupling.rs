@@ -11,7 +11,7 @@ use crate::solve::AnalysisKind;
 use crate::{Error, Result};
 use serde::de::{self, MapAccess, Visitor};
 use serde::{Deserialize, Deserializer, Serialize};
-use std::collections::{BTreeMap, BTreeSet};
+use std::collections::BTreeMap;
 
 /// A distributing coupling (RBE3): `nodes` names a surface (weights: tributary areas)
 /// or a node set (equal weights); `point` is the reference point (default: the weighted
@@ -126,19 +126,10 @@ pub struct CouplingInputs<'a> {
 
 /// Validate and build every `[[couplings]]` entry.
 pub fn build_couplings(decks: &[CouplingDeck], inp: &CouplingInputs) -> Result<Vec<CouplingDef>> {
-    let mut names = BTreeSet::new();
+    super::build::unique_names("couplings", decks.iter().map(|d| d.name.as_str()))?;
     let mut out = Vec::new();
     for (i, c) in decks.iter().enumerate() {
         let f = format!("couplings[{i}]");
-        if c.name.trim().is_empty() {
-            return Err(err(format!("{f}.name"), "expected a non-empty name"));
-        }
-        if !names.insert(c.name.clone()) {
-            return Err(err(
-                format!("{f}.name"),
-                format!("`{}` is defined twice", c.name),
-            ));
-        }
         if inp.analysis == AnalysisKind::Explicit {
             return Err(err(
                 &f,

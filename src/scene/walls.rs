@@ -134,19 +134,10 @@ pub struct WallInputs<'a> {
 
 /// Validate and build every `[[walls]]` entry.
 pub fn build_walls(decks: &[WallDeck], inp: &WallInputs) -> Result<Vec<WallDef>> {
-    let mut names = BTreeSet::new();
+    super::build::unique_names("walls", decks.iter().map(|d| d.name.as_str()))?;
     let mut out = Vec::new();
     for (i, w) in decks.iter().enumerate() {
         let f = format!("walls[{i}]");
-        if w.name.trim().is_empty() {
-            return Err(err(format!("{f}.name"), "expected a non-empty name"));
-        }
-        if !names.insert(w.name.clone()) {
-            return Err(err(
-                format!("{f}.name"),
-                format!("`{}` is defined twice", w.name),
-            ));
-        }
         out.push(build_wall(w, &f, inp)?);
     }
     Ok(out)
