@@ -96,10 +96,11 @@ impl Model {
         let mut unknowns = vec![solids.unknowns()];
         unknowns.extend(contributions.iter().map(|c| c.unknowns()));
         let dofs = DofMap::new(comm, &mesh.owned_nodes_per_rank, &mesh.ghosts, &unknowns);
-        // Constraints: later entries win where two constrain the same dof.
-        let mut which = vec![usize::MAX; 3 * mesh.n_local_nodes()];
+        // Supports of owned nodes: later entries win where two constrain the same dof.
+        let n_owned = mesh.n_owned();
+        let mut which = vec![usize::MAX; 3 * n_owned];
         for (ci, c) in constraints.iter().enumerate() {
-            for &n in mesh.set(&c.set) {
+            for &n in mesh.set(&c.set).iter().filter(|&&n| n < n_owned) {
                 for k in 0..3 {
                     if c.comps[k] {
                         which[3 * n + k] = ci;
@@ -107,16 +108,11 @@ impl Model {
                 }
             }
         }
-        let n_owned_dofs = 3 * mesh.n_owned();
-        let constrained: Vec<(usize, usize)> = which
+        let constrained_owned = which
             .iter()
             .enumerate()
             .filter(|(_, &c)| c != usize::MAX)
             .map(|(d, &c)| (d, c))
-            .collect();
-        let constrained_owned = constrained
-            .into_iter()
-            .filter(|&(d, _)| d < n_owned_dofs)
             .collect();
         let reaction_nodes = reaction_sets
             .iter()
@@ -159,41 +155,40 @@ impl Model {
     /// The contributions' history columns in output order: each contribution's own
     /// columns in list order, then the shared ones (merged by name).
     fn merge_columns(&mut self) {
-        let mut own = Vec::new();
-        let mut shared: Vec<Column> = Vec::new();
-        let mut map = Vec::new();
-        for c in std::iter::once(&self.solids as &dyn Contribution)
-            .chain(self.contributions.iter().map(|c| c.as_ref()))
-        {
-            let mut m = Vec::new();
-            for col in c.columns() {
-                if col.shared {
-                    let i = match shared.iter().position(|s| s.name == col.name) {
-                        Some(i) => i,
-                        None => {
-                            shared.push(col);
-                            shared.len() - 1
+        let declared: Vec<Vec<Column>> = self.each_ref().map(|c| c.columns()).collect();
+        let mut columns: Vec<Column> = declared
+            .iter()
+            .flatten()
+            .filter(|c| !c.shared)
+            .cloned()
+            .collect();
+        let n_own = columns.len();
+        for col in declared.iter().flatten().filter(|c| c.shared) {
+            if !columns[n_own..].iter().any(|s| s.name == col.name) {
+                columns.push(col.clone());
+            }
+        }
+        let mut next_own = 0;
+        self.column_map = declared
+            .iter()
+            .map(|cols| {
+                cols.iter()
+                    .map(|col| {
+                        if col.shared {
+                            n_own
+                                + columns[n_own..]
+                                    .iter()
+                                    .position(|s| s.name == col.name)
+                                    .unwrap()
+                        } else {
+                            next_own += 1;
+                            next_own - 1
                         }
-                    };
-                    m.push(usize::MAX - i);
-                } else {
-                    m.push(own.len());
-                    own.push(col);
-                }
-            }
-            map.push(m);
-        }
-        let n_own = own.len();
-        for m in &mut map {
-            for i in m.iter_mut() {
-                if *i > usize::MAX / 2 {
-                    *i = n_own + (usize::MAX - *i);
-                }
-            }
-        }
-        own.extend(shared);
-        self.columns = own;
-        self.column_map = map;
+                    })
+                    .collect()
+            })
+            .collect();
+        self.columns = columns;
     }
 
     /// Every contribution, the solid elements first.
