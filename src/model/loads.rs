@@ -60,46 +60,41 @@ impl ContributionKind for LoadDef {
         self.clone()
     }
     fn build(&self, mesh: &LocalMesh, elements: &LocalElements) -> Box<dyn Contribution> {
-        let faces = |surface: &str| -> Vec<Vec<usize>> {
-            mesh.surfaces
-                .get(surface)
-                .map(|v| v.as_slice())
-                .unwrap_or(&[])
-                .iter()
-                .map(|&(e, f)| elements.face_nodes(e, f))
-                .collect()
-        };
-        match self {
+        let (surface, kind, curve) = match self {
             LoadDef::Nodal { set, force, curve } => {
                 let no = mesh.n_owned();
-                Box::new(NodalLoad {
+                return Box::new(NodalLoad {
                     name: set.clone(),
                     nodes: mesh.set(set).iter().copied().filter(|&n| n < no).collect(),
                     force: *force,
                     curve: curve.clone(),
-                })
+                });
             }
             LoadDef::Traction {
                 surface,
                 traction,
                 curve,
-            } => Box::new(SurfaceLoad {
-                name: surface.clone(),
-                faces: faces(surface),
-                kind: SurfaceKind::Traction(*traction),
-                curve: curve.clone(),
-            }),
+            } => (surface, SurfaceKind::Traction(*traction), curve),
             LoadDef::Pressure {
                 surface,
                 pressure,
                 curve,
-            } => Box::new(SurfaceLoad {
-                name: surface.clone(),
-                faces: faces(surface),
-                kind: SurfaceKind::Pressure(*pressure),
-                curve: curve.clone(),
-            }),
-        }
+            } => (surface, SurfaceKind::Pressure(*pressure), curve),
+        };
+        let faces = mesh
+            .surfaces
+            .get(surface)
+            .map(|v| v.as_slice())
+            .unwrap_or(&[])
+            .iter()
+            .map(|&(e, f)| elements.face_nodes(e, f))
+            .collect();
+        Box::new(SurfaceLoad {
+            name: surface.clone(),
+            faces,
+            kind,
+            curve: curve.clone(),
+        })
     }
 }
 

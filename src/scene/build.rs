@@ -530,26 +530,27 @@ pub fn build(deck: &Deck, deck_dir: &Path) -> Result<Scene> {
     for s in reaction_sets.iter().chain(&deck.output.displacements) {
         column_owner.insert(s, "a node set of [output]".to_string());
     }
-    for (i, w) in deck.walls.iter().enumerate() {
-        if let Some(o) = column_owner.insert(&w.name, format!("walls[{i}]")) {
-            return Err(err(
-                format!("walls[{i}].name"),
-                format!(
-                    "`{}` is also the name of {o}: their history columns would collide",
-                    w.name
-                ),
-            ));
-        }
-    }
-    for (i, c) in deck.couplings.iter().enumerate() {
-        if let Some(o) = column_owner.insert(&c.name, format!("couplings[{i}]")) {
-            return Err(err(
-                format!("couplings[{i}].name"),
-                format!(
-                    "`{}` is also the name of {o}: their history columns would collide",
-                    c.name
-                ),
-            ));
+    let named = [
+        (
+            "walls",
+            deck.walls
+                .iter()
+                .map(|w| w.name.as_str())
+                .collect::<Vec<_>>(),
+        ),
+        (
+            "couplings",
+            deck.couplings.iter().map(|c| c.name.as_str()).collect(),
+        ),
+    ];
+    for (what, names) in &named {
+        for (i, &n) in names.iter().enumerate() {
+            if let Some(o) = column_owner.insert(n, format!("{what}[{i}]")) {
+                return Err(err(
+                    format!("{what}[{i}].name"),
+                    format!("`{n}` is also the name of {o}: their history columns would collide"),
+                ));
+            }
         }
     }
     let mut contributions: Vec<ContributionDef> =
