@@ -68,6 +68,10 @@ pub struct Evaluation<'a> {
     /// The Jacobian ∂r/∂u, when wanted: blocks by global index (rows owned elsewhere
     /// are sent to their owners by the matrix).
     pub jacobian: Option<&'a mut DistMatrix>,
+    /// A perturbed state of a finite-difference product (JFNK): a contribution with
+    /// branches (contact) evaluates on the branch of its last evaluation and changes no
+    /// state, so J·v does not straddle a kink.
+    pub frozen: bool,
 }
 
 /// What the reference stiffness says about each local node, for contributions whose

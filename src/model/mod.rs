@@ -226,6 +226,7 @@ impl Model {
             u: &u0,
             forces: None,
             jacobian: Some(&mut k),
+            frozen: false,
         });
         self.solids.state_new = old;
         k.finish_assembly(comm);
@@ -300,9 +301,33 @@ impl Model {
         t: f64,
         r: &mut [f64],
     ) -> Result<ResidualInfo> {
+        self.residual_at(comm, u_owned, t, r, false)
+    }
+
+    /// The residual at a perturbed state of a finite-difference product: contributions
+    /// keep the branches and state of the last [`Model::residual`] (see
+    /// [`Evaluation::frozen`]).
+    pub fn residual_frozen(
+        &mut self,
+        comm: &dyn Comm,
+        u_owned: &[f64],
+        t: f64,
+        r: &mut [f64],
+    ) -> Result<ResidualInfo> {
+        self.residual_at(comm, u_owned, t, r, true)
+    }
+
+    fn residual_at(
+        &mut self,
+        comm: &dyn Comm,
+        u_owned: &[f64],
+        t: f64,
+        r: &mut [f64],
+        frozen: bool,
+    ) -> Result<ResidualInfo> {
         let n = u_owned.len();
         let mut fi = vec![0.0; n];
-        let info = self.forces(comm, u_owned, t, &mut fi, r)?;
+        let info = self.forces_at(comm, u_owned, t, &mut fi, r, frozen)?;
         for i in 0..n {
             r[i] = fi[i] - r[i];
         }
@@ -319,12 +344,25 @@ impl Model {
         f_int_owned: &mut [f64],
         f_ext_owned: &mut [f64],
     ) -> Result<ResidualInfo> {
+        self.forces_at(comm, u_owned, t, f_int_owned, f_ext_owned, false)
+    }
+
+    /// [`Model::forces`], frozen as [`Model::residual_frozen`] when asked.
+    pub fn forces_at(
+        &mut self,
+        comm: &dyn Comm,
+        u_owned: &[f64],
+        t: f64,
+        f_int_owned: &mut [f64],
+        f_ext_owned: &mut [f64],
+        frozen: bool,
+    ) -> Result<ResidualInfo> {
         let mut u_local = std::mem::take(&mut self.work);
         self.dofs.gather(comm, u_owned, &mut u_local);
         let nl = u_local.len();
         let mut f_int = vec![0.0; nl];
         let mut f_ext = vec![0.0; nl];
-        let failure = self.evaluate_all(&u_local, t, Some((&mut f_int, &mut f_ext)), None);
+        let failure = self.evaluate_all(&u_local, t, Some((&mut f_int, &mut f_ext)), None, frozen);
         self.dofs.sum_to_owned(comm, &f_int, f_int_owned);
         self.dofs.sum_to_owned(comm, &f_ext, f_ext_owned);
         let mut sums = [0.0, 0.0, if failure.is_some() { 1.0 } else { 0.0 }];
@@ -352,6 +390,7 @@ impl Model {
         t: f64,
         mut forces: Option<(&mut [f64], &mut [f64])>,
         mut jacobian: Option<&mut DistMatrix>,
+        frozen: bool,
     ) -> Option<String> {
         let (coords, dofs) = (&self.mesh.coords, &self.dofs);
         let mut failure = None;
@@ -365,6 +404,7 @@ impl Model {
                 u: u_local,
                 forces: forces.as_mut().map(|(a, b)| (&mut **a, &mut **b)),
                 jacobian: jacobian.as_deref_mut(),
+                frozen,
             };
             if let Err(e) = c.evaluate(&mut ev) {
                 failure.get_or_insert(e);
@@ -396,7 +436,7 @@ impl Model {
         let mut u_local = std::mem::take(&mut self.work);
         self.dofs.gather(comm, u_owned, &mut u_local);
         k.zero();
-        let failure = self.evaluate_all(&u_local, t, None, Some(k));
+        let failure = self.evaluate_all(&u_local, t, None, Some(k), false);
         k.finish_assembly(comm);
         self.work = u_local;
         if !comm.all_ok(failure.is_none()) {

@@ -16,7 +16,7 @@ use super::contribution::{
 use super::dofs::{DofMap, Unknowns};
 use super::kind::{ContributionKind, Localizer};
 use super::local::{LocalElements, LocalMesh};
-use crate::contact::law::{alm, penalty};
+use crate::contact::law::{alm_law, penalty, AlmLaw, Branch, Decision, Threshold};
 use crate::contact::motion::{Pose, RigidMotion};
 use crate::contact::shape::Shape;
 use crate::contact::wall::{project, ContactMethod, ShapeDef};
@@ -24,6 +24,8 @@ use serde::{Deserialize, Serialize};
 
 /// Jacobian-only regularization of the multiplier rows (relative to κ).
 const JACOBIAN_REG: f64 = 1e-8;
+/// How far outside the cone a locked node's trial force may lie before it slips.
+pub const LOCK_MARGIN: f64 = 0.02;
 
 /// A rigid wall of the model: shape, placement and prescribed motion, friction, the
 /// enforcement method and the tracked nodes (node-to-surface, one way, as the paper's
@@ -41,6 +43,13 @@ pub struct WallDef {
     pub kappa: Option<f64>,
     /// Penalty stiffness as a multiple of the nodal stiffness (LS-DYNA's SLSFAC idea).
     pub penalty_scale: f64,
+    /// ALM's tangential augmentation α ([`AlmLaw::alpha`]).
+    pub tangential_augmentation: f64,
+    /// ALM's friction threshold.
+    pub friction_threshold: Threshold,
+    /// Stick/slip flips of one node within a step after which it is locked in stick
+    /// ([`Decision::Locked`]; MOOSE's `stick_lock_iterations`); 0: never.
+    pub stick_lock_flips: u32,
     /// The tracked node set's name (for messages).
     pub set: String,
     pub nodes: Vec<usize>,
@@ -113,6 +122,10 @@ pub struct NodeContact {
     pub normal_force: f64,
     pub active: bool,
     pub sticking: bool,
+    /// The ALM law's branch.
+    pub branch: Branch,
+    /// ‖q‖/s − 1 of the ALM law (−∞ without a threshold).
+    pub cone_excess: f64,
 }
 
 /// One wall on this rank (its owned tracked nodes).
@@ -142,6 +155,8 @@ pub struct Wall {
     ft_old: Vec<[f64; 3]>,
     ft_new: Vec<[f64; 3]>,
     pub last: Vec<NodeContact>,
+    /// Stick/slip flips of each node since the last commit.
+    flips: Vec<u32>,
 }
 
 /// Local residual and Jacobian blocks of one tracked node.
@@ -192,6 +207,7 @@ impl Wall {
             ft_old: vec![[0.0; 3]; n],
             ft_new: vec![[0.0; 3]; n],
             last: vec![NodeContact::default(); n],
+            flips: vec![0; n],
             def,
         }
     }
@@ -200,12 +216,50 @@ impl Wall {
         self.def.method == ContactMethod::Alm
     }
 
+    /// An ALM wall with friction: its sticking nodes have a cone to stay inside.
+    fn has_cone(&self) -> bool {
+        self.is_alm() && self.def.friction > 0.0
+    }
+
+    /// The ALM law of this wall.
+    fn law(&self) -> AlmLaw {
+        AlmLaw {
+            mu: self.def.friction,
+            alpha: self.def.tangential_augmentation,
+            threshold: self.def.friction_threshold,
+        }
+    }
+
+    /// How node `j`'s stick/slip case is chosen: on its last branch in a frozen
+    /// evaluation, locked after too many flips.
+    fn decision(&self, j: usize, frozen: bool) -> Decision {
+        if frozen {
+            Decision::Forced(self.last[j].branch)
+        } else if self.def.stick_lock_flips > 0 && self.flips[j] >= self.def.stick_lock_flips {
+            Decision::Locked {
+                margin: LOCK_MARGIN,
+            }
+        } else {
+            Decision::Natural
+        }
+    }
+
     /// One tracked node placed at `pose` (`pose_old` at the step's start).
-    fn node(&self, j: usize, x: [f64; 3], lam: [f64; 3], pose: &Pose, pose_old: &Pose) -> NodeEval {
+    #[allow(clippy::too_many_arguments)]
+    fn node(
+        &self,
+        j: usize,
+        x: [f64; 3],
+        lam: [f64; 3],
+        pose: &Pose,
+        pose_old: &Pose,
+        decision: Decision,
+    ) -> NodeEval {
         let mut e = NodeEval {
             c: NodeContact {
                 gap: f64::NAN,
                 lambda: lam,
+                cone_excess: f64::NEG_INFINITY,
                 ..NodeContact::default()
             },
             r_node: [0.0; 3],
@@ -248,9 +302,11 @@ impl Wall {
         let mu = self.def.friction;
         // f_local (force on the node in the frame), ∂f_local/∂g, and for ALM ∂f/∂λ.
         let (fl, dfdg) = if alm_wall {
-            let pt = alm(g, lam, mu);
+            let pt = alm_law(g, lam, &self.law(), decision);
             e.c.active = pt.active;
             e.c.sticking = pt.sticking;
+            e.c.branch = pt.branch;
+            e.c.cone_excess = pt.cone_excess;
             let mut fl = [0.0; 3];
             let mut dfdg = [[0.0; 3]; 3];
             for i in 0..3 {
@@ -396,7 +452,8 @@ impl Contribution for Wall {
 
     /// Forces on the tracked nodes count as external; multiplier rows (−κ h, zero at a
     /// solution) go with the internal forces. Also keeps each node's state for the
-    /// report and the commit.
+    /// report and the commit and counts its stick/slip flips; a frozen evaluation
+    /// keeps each node on its last branch and changes no state.
     fn evaluate(&mut self, ev: &mut Evaluation) -> Result<(), String> {
         self.t_new = ev.t;
         if self.explicit && self.is_alm() {
@@ -417,7 +474,7 @@ impl Contribution for Wall {
                 }
                 None => [0.0; 3],
             };
-            let e = self.node(j, x, lam, &pose, &pose_old);
+            let e = self.node(j, x, lam, &pose, &pose_old, self.decision(j, ev.frozen));
             if let Some((f_int, f_ext)) = ev.forces.as_mut() {
                 for c in 0..3 {
                     f_ext[3 * n + c] -= e.r_node[c];
@@ -438,15 +495,23 @@ impl Contribution for Wall {
                     k.add_block(m, m, &flat(e.k_ll));
                 }
             }
+            if ev.frozen {
+                continue;
+            }
             self.x_new[j] = x;
             self.ft_new[j] = e.ft_new;
             self.n_new[j] = e.normal;
-            self.last[j] = e.c;
+            let (was, now) = (self.last[j], e.c);
+            if was.active && now.active && was.sticking != now.sticking {
+                self.flips[j] += 1;
+            }
+            self.last[j] = now;
         }
         Ok(())
     }
 
     fn commit(&mut self) {
+        self.flips.iter_mut().for_each(|f| *f = 0);
         self.t_old = self.t_new;
         self.x_old.copy_from_slice(&self.x_new);
         self.ft_old.copy_from_slice(&self.ft_new);
@@ -456,7 +521,10 @@ impl Contribution for Wall {
     /// `<wall>.fx … .mz`: force and moment on the wall (about its current origin) at the
     /// last evaluation, `<wall>.ux … .uz` its prescribed displacement; shared:
     /// `max_penetration` (max(0, −g_N) over all tracked nodes of all walls),
-    /// `contact_active`, `contact_sticking`.
+    /// `contact_active`, `contact_sticking`, and for frictional ALM walls
+    /// `max_cone_excess`: how far outside the Coulomb cone a sticking node's force lies,
+    /// max(0, ‖λ_T‖/(μ λ_N) − 1) (nonzero only for nodes locked in stick, at most
+    /// [`LOCK_MARGIN`] at a converged step).
     fn columns(&self) -> Vec<Column> {
         let w = &self.def.name;
         let mut c: Vec<Column> = ["fx", "fy", "fz", "mx", "my", "mz"]
@@ -479,6 +547,14 @@ impl Contribution for Wall {
                 shared: true,
                 count: true,
                 ..Column::sum(name)
+            });
+        }
+        if self.has_cone() {
+            c.push(Column {
+                reduce: Reduce::Max,
+                shared: true,
+                run_max: true,
+                ..Column::sum("max_cone_excess")
             });
         }
         c
@@ -504,6 +580,10 @@ impl Contribution for Wall {
             }
             if nc.sticking {
                 out[N_OWN_COLUMNS + 2] += 1.0;
+                if self.has_cone() {
+                    let e = &mut out[N_OWN_COLUMNS + 3];
+                    *e = e.max(nc.cone_excess);
+                }
             }
         }
         out[6..9].copy_from_slice(&self.def.motion.displacement(self.t_new));
@@ -678,5 +758,91 @@ impl Contribution for Wall {
                 a[3 * n + i] -= an * nrm[i];
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::contact::law::Tangential;
+    use crate::parallel::run_ranks;
+
+    /// One node resting on a fixed plane (μ = 0.5) with λ_N = 1, so s = 0.5: its
+    /// tangential multiplier alternates just inside and just outside the cone, as on an
+    /// iteration that cycles. The node flips at most `stick_lock_flips` times, then
+    /// stays in stick within [`LOCK_MARGIN`], slips when its force leaves the cone
+    /// clearly, and a commit frees it. Frozen evaluations keep the last branch.
+    #[test]
+    fn a_node_on_the_cone_flips_a_bounded_number_of_times_per_step() {
+        run_ranks(1, |c| {
+            let def = WallDef {
+                name: "floor".into(),
+                shape: ShapeDef::Plane { display_size: 1.0 },
+                motion: RigidMotion {
+                    origin: [0.0; 3],
+                    axes: [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
+                    translation: None,
+                    rotation: None,
+                },
+                friction: 0.5,
+                method: ContactMethod::Alm,
+                kappa: Some(1.0),
+                penalty_scale: 0.1,
+                tangential_augmentation: 1.0,
+                friction_threshold: Threshold::Augmented,
+                stick_lock_flips: 4,
+                set: "n".into(),
+                nodes: vec![0],
+                areas: vec![1.0],
+            };
+            let coords = [[0.0; 3]];
+            let dofs = DofMap::new(
+                c,
+                &[1],
+                &[],
+                &[Unknowns {
+                    owned: 1,
+                    ..Default::default()
+                }],
+            );
+            let mut w = Wall::new(def, &coords);
+            w.bind(&dofs, 0);
+            let eval = |w: &mut Wall, lt: f64, frozen: bool| {
+                let u = [0.0, 0.0, 0.0, 1.0, lt, 0.0];
+                let (mut fi, mut fe) = ([0.0; 6], [0.0; 6]);
+                let mut ev = Evaluation {
+                    t: 0.0,
+                    coords: &coords,
+                    dofs: &dofs,
+                    u: &u,
+                    forces: Some((&mut fi, &mut fe)),
+                    jacobian: None,
+                    frozen,
+                };
+                w.evaluate(&mut ev).unwrap();
+                w.last[0]
+            };
+            let mut flips = 0;
+            let mut was = eval(&mut w, 0.495, false);
+            assert!(was.active && was.sticking);
+            for k in 0..20 {
+                let lt = if k % 2 == 0 { 0.505 } else { 0.495 };
+                let now = eval(&mut w, lt, false);
+                flips += (now.sticking != was.sticking) as u32;
+                was = now;
+            }
+            assert_eq!(flips, 4);
+            assert!(was.sticking, "locked in stick within the margin");
+            // A frozen evaluation outside the cone keeps the stick branch and no state.
+            let frozen = eval(&mut w, 0.8, true);
+            assert_eq!(frozen.branch.tangential, Tangential::Stick);
+            assert!(w.last[0].sticking);
+            // Clearly outside: slip.
+            assert!(!eval(&mut w, 0.6, false).sticking);
+            // A new step starts unlocked: 0.505 slips again.
+            w.commit();
+            assert!(eval(&mut w, 0.495, false).sticking);
+            assert!(!eval(&mut w, 0.505, false).sticking);
+        });
     }
 }

@@ -2,6 +2,7 @@
 //! ALM or penalty, tracked nodes) turned into [`WallDef`]s, with the checks an analyst
 //! needs: sizes, axes, a tracked set that exists and no tracked node starting inside.
 
+use crate::contact::law::{Threshold, DEFAULT_TANGENTIAL_AUGMENTATION};
 use crate::contact::motion::{MotionKind, RigidMotion, Rotation, Translation};
 use crate::contact::wall::{project, ContactMethod, ShapeDef};
 use crate::curve::Curve;
@@ -58,9 +59,23 @@ pub struct WallDeck {
     /// ALM scale κ (force/length); default: each node's stiffness diagonal.
     #[serde(default)]
     pub kappa: Option<f64>,
-    /// Penalty stiffness / nodal stiffness (default 0.1, LS-DYNA's SLSFAC default).
+    /// Penalty stiffness / nodal stiffness (default 1: the stiffest that converges on
+    /// every wall scene; 0.1, LS-DYNA's SLSFAC default, gave 60 % less Hertz force,
+    /// `scripts/penalty-study`).
     #[serde(default = "d_penalty_scale")]
     pub penalty_scale: f64,
+    /// ALM's tangential augmentation α (stick stiffness α κ); default
+    /// [`DEFAULT_TANGENTIAL_AUGMENTATION`].
+    #[serde(default)]
+    pub tangential_augmentation: Option<f64>,
+    /// ALM's friction threshold: "multiplier" (μ max(λ_N, 0), the paper's, default) or
+    /// "augmented" (μ max(λ_N − g_N, 0)).
+    #[serde(default)]
+    pub friction_threshold: Threshold,
+    /// ALM: lock a node in stick after this many stick/slip flips within a step (within
+    /// a 2 % margin of the cone; 0 = never, the default).
+    #[serde(default)]
+    pub stick_lock_flips: u32,
     #[serde(default)]
     pub motion: Option<WallMotionDeck>,
 }
@@ -90,7 +105,7 @@ fn ez() -> [f64; 3] {
     [0.0, 0.0, 1.0]
 }
 fn d_penalty_scale() -> f64 {
-    0.1
+    1.0
 }
 
 fn err(field: impl std::fmt::Display, msg: impl std::fmt::Display) -> Error {
@@ -255,6 +270,14 @@ fn build_wall(w: &WallDeck, f: &str, inp: &WallInputs) -> Result<WallDef> {
             ));
         }
     }
+    if let Some(a) = w.tangential_augmentation {
+        if !(a > 0.0 && a <= 1.0) {
+            return Err(err(
+                format!("{f}.tangential_augmentation"),
+                format!("expected a factor in (0, 1], got {a}"),
+            ));
+        }
+    }
     if !(w.penalty_scale > 0.0 && w.penalty_scale.is_finite()) {
         return Err(err(
             format!("{f}.penalty_scale"),
@@ -358,6 +381,11 @@ fn build_wall(w: &WallDeck, f: &str, inp: &WallInputs) -> Result<WallDef> {
         method: w.method,
         kappa: w.kappa,
         penalty_scale: w.penalty_scale,
+        tangential_augmentation: w
+            .tangential_augmentation
+            .unwrap_or(DEFAULT_TANGENTIAL_AUGMENTATION),
+        friction_threshold: w.friction_threshold,
+        stick_lock_flips: w.stick_lock_flips,
         set,
         nodes,
         areas,

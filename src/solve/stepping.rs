@@ -24,6 +24,9 @@ impl NonlinearProblem for StaticProblem<'_> {
     fn residual(&mut self, comm: &dyn Comm, u: &[f64], r: &mut [f64]) -> Result<f64> {
         Ok(self.model.residual(comm, u, self.time, r)?.f_ref)
     }
+    fn residual_frozen(&mut self, comm: &dyn Comm, u: &[f64], r: &mut [f64]) -> Result<f64> {
+        Ok(self.model.residual_frozen(comm, u, self.time, r)?.f_ref)
+    }
     fn jacobian(&mut self, comm: &dyn Comm, u: &[f64], k: &mut DistMatrix) -> Result<()> {
         self.model.jacobian(comm, u, self.time, k)
     }

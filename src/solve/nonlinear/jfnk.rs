@@ -105,7 +105,7 @@ impl LinearOperator for FdJacobian<'_> {
         for i in 0..x.len() {
             self.w[i] = self.u[i] + eps * self.w[i];
         }
-        self.problem.residual(comm, &self.w, &mut self.r1)?;
+        self.problem.residual_frozen(comm, &self.w, &mut self.r1)?;
         self.products += 1;
         for i in 0..x.len() {
             y[i] = if self.is_c[i] {
@@ -359,7 +359,7 @@ fn coupling_product(
     let eps = op.epsilon(gn);
     let w: Vec<f64> = op.u.iter().zip(gap).map(|(u, g)| u + eps * g).collect();
     let mut r1 = vec![0.0; gap.len()];
-    op.problem.residual(comm, &w, &mut r1)?;
+    op.problem.residual_frozen(comm, &w, &mut r1)?;
     op.products += 1;
     for i in 0..gap.len() {
         out[i] = if op.is_c[i] {

@@ -109,6 +109,12 @@ pub trait NonlinearProblem {
     /// r(u) on owned dofs (rows of constrained dofs hold reactions) and the force
     /// scale f_ref that relative residual tolerances refer to.
     fn residual(&mut self, comm: &dyn Comm, u: &[f64], r: &mut [f64]) -> Result<f64>;
+    /// r at a perturbed point of a finite-difference product J·v ≈ (r(u + εv) − r(u))/ε:
+    /// the branches of semi-smooth terms (contact) stay those of the last
+    /// [`NonlinearProblem::residual`], so the product is the generalized Jacobian's.
+    fn residual_frozen(&mut self, comm: &dyn Comm, u: &[f64], r: &mut [f64]) -> Result<f64> {
+        self.residual(comm, u, r)
+    }
     /// The unconstrained Jacobian ∂r/∂u at u, assembled into `k` (pattern fixed).
     fn jacobian(&mut self, comm: &dyn Comm, u: &[f64], k: &mut DistMatrix) -> Result<()>;
 }

@@ -53,6 +53,28 @@ struct StepProblem<'a> {
 
 impl NonlinearProblem for StepProblem<'_> {
     fn residual(&mut self, comm: &dyn Comm, u: &[f64], r: &mut [f64]) -> Result<f64> {
+        self.residual_at(comm, u, r, false)
+    }
+    fn residual_frozen(&mut self, comm: &dyn Comm, u: &[f64], r: &mut [f64]) -> Result<f64> {
+        self.residual_at(comm, u, r, true)
+    }
+    fn jacobian(&mut self, comm: &dyn Comm, u: &[f64], k: &mut DistMatrix) -> Result<()> {
+        self.model.jacobian(comm, u, self.t1, k)?;
+        let c = self.p.c_m(self.dt) / (1.0 - self.p.alpha_f);
+        self.model.add_mass(comm, self.mass, c, k);
+        Ok(())
+    }
+}
+
+impl StepProblem<'_> {
+    /// The generalized-α residual (frozen: see [`NonlinearProblem::residual_frozen`]).
+    fn residual_at(
+        &mut self,
+        comm: &dyn Comm,
+        u: &[f64],
+        r: &mut [f64],
+        frozen: bool,
+    ) -> Result<f64> {
         let (p, dt, o) = (self.p, self.dt, self.old);
         for i in 0..u.len() {
             let a1 = p.acceleration(dt, u[i], o.u[i], o.v[i], o.a[i]);
@@ -60,7 +82,9 @@ impl NonlinearProblem for StepProblem<'_> {
         }
         self.model
             .apply_mass(comm, self.mass, &self.am, &mut self.ma);
-        let info = self.model.forces(comm, u, self.t1, &mut self.fi, r)?;
+        let info = self
+            .model
+            .forces_at(comm, u, self.t1, &mut self.fi, r, frozen)?;
         let c = 1.0 / (1.0 - p.alpha_f);
         let w = p.alpha_f * c;
         let mut s = [0.0, 0.0];
@@ -71,12 +95,6 @@ impl NonlinearProblem for StepProblem<'_> {
         }
         comm.allreduce_sum(&mut s);
         Ok(info.f_ref.max(s[0].sqrt()).max(s[1].sqrt()))
-    }
-    fn jacobian(&mut self, comm: &dyn Comm, u: &[f64], k: &mut DistMatrix) -> Result<()> {
-        self.model.jacobian(comm, u, self.t1, k)?;
-        let c = self.p.c_m(self.dt) / (1.0 - self.p.alpha_f);
-        self.model.add_mass(comm, self.mass, c, k);
-        Ok(())
     }
 }
 
