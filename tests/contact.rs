@@ -227,6 +227,16 @@ fn bad_wall_decks_name_the_field() {
             "shape = \"prism\"\nsize = [1, 2]",
             "walls[0].size",
         ),
+        (
+            "shape = \"plane\"",
+            "shape = \"plane\"\ntangential_augmentation = 2",
+            "walls[0].tangential_augmentation",
+        ),
+        (
+            "shape = \"plane\"",
+            "shape = \"plane\"\nfriction_threshold = \"lagrange\"",
+            "friction_threshold",
+        ),
     ] {
         let e = try_run_deck("badwall", &edit(PATCH, from, to))
             .err()
