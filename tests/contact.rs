@@ -245,6 +245,33 @@ fn bad_wall_decks_name_the_field() {
     }
 }
 
+/// `hourglass` is refused where no spring exists and when negative, naming the field.
+#[test]
+fn bad_hourglass_values_name_the_part_field() {
+    for (to, want) in [
+        (
+            "formulation = \"standard\"\nhourglass = 1",
+            "parts[0].hourglass",
+        ),
+        (
+            "formulation = \"fbar\"\nhourglass = -1",
+            "parts[0].hourglass",
+        ),
+        (
+            "formulation = \"reduced\"\nhourglass = nan",
+            "parts[0].hourglass",
+        ),
+    ] {
+        let text = edit(
+            PATCH,
+            "material = \"m\"",
+            &format!("material = \"m\"\n{to}"),
+        );
+        let e = try_run_deck("badhg", &text).err().expect("must fail");
+        assert!(e.message.contains(want), "{want}: {}", e.message);
+    }
+}
+
 /// The clip: zero penetration at every step on both cylindrical pins, and the ring is
 /// held only by the pins, so their forces balance.
 #[test]

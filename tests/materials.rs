@@ -152,6 +152,21 @@ fn cook_membrane_converges_to_the_published_band_and_plain_hex8_locks() {
     for w in errs.windows(2) {
         assert!(w[1] < w[0], "error must fall under refinement: {errs:?}");
     }
+    // The reduced hex8 (one point, hourglass spring) converges to the same band.
+    let reduced = [cook([8, 8, 2], "reduced"), cook([24, 24, 4], "reduced")];
+    eprintln!(
+        "Cook reduced: 8×8×2 {:.4}, 24×24×4 {:.4}",
+        reduced[0], reduced[1]
+    );
+    assert!(
+        reduced[1] > COOK_BAND.0 * 0.985 && reduced[1] < COOK_BAND.1 * 1.015,
+        "reduced: {} not within 1.5 % of {COOK_BAND:?}",
+        reduced[1]
+    );
+    assert!(
+        reduced[0] < reduced[1],
+        "reduced must approach from below: {reduced:?}"
+    );
     let plain = cook([16, 16, 2], "standard");
     eprintln!("Cook standard hex8 16×16×2: {plain:.4}");
     assert!(

@@ -45,18 +45,46 @@ impl std::error::Error for ElementError {}
 ///   as B-bar: ε̄ = ε + (θ̄ − tr ε)/3 I with θ̄ the volume average of tr ε (Hughes §4.5).
 ///   The consistent tangent gains the non-symmetric term of de Souza Neto eq. 15.20.
 ///   Only hex8 changes; a one-point tet4 is the same either way.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+/// * `Reduced`: one point with the mean gradients and a hourglass stiffness
+///   ([`super::reduced`]; LS-DYNA's default solid). Does not lock, and its hourglass
+///   modes stay at their reference stiffness under any compression.
+///
+/// `hourglass` scales the hourglass spring of [`super::reduced`] (1 = the element's own
+/// deviatoric stiffness in those modes). On F-bar it is added to the full element
+/// (default 0): under compressions beyond about 40 % the pressure's geometric stiffness
+/// turns an F-bar hourglass mode negative and elements fold one by one; the spring
+/// holds them, at the price of some extra stiffness (measured in README "Why
+/// rubber-indent stops").
+#[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize, serde::Deserialize)]
 pub enum Formulation {
     #[default]
     Standard,
-    FBar,
+    FBar {
+        hourglass: f64,
+    },
+    Reduced {
+        hourglass: f64,
+    },
 }
 
-/// Number of integration points of the kind's rule (history is stored per point).
-pub fn n_gauss(kind: ElemKind) -> usize {
-    match kind {
-        ElemKind::Hex8 => 8,
-        ElemKind::Tet4 => 1,
+impl Formulation {
+    /// F-bar without hourglass spring.
+    pub const FBAR: Formulation = Formulation::FBar { hourglass: 0.0 };
+    /// The reduced element with its reference hourglass stiffness.
+    pub const REDUCED: Formulation = Formulation::Reduced { hourglass: 1.0 };
+
+    fn is_fbar(self) -> bool {
+        matches!(self, Formulation::FBar { .. })
+    }
+}
+
+/// Number of integration points of the kind's rule under `form` (history is stored per
+/// point).
+pub fn n_gauss(kind: ElemKind, form: Formulation) -> usize {
+    match (kind, form) {
+        (ElemKind::Hex8, Formulation::Reduced { .. }) => 1,
+        (ElemKind::Hex8, _) => 8,
+        (ElemKind::Tet4, _) => 1,
     }
 }
 
@@ -64,7 +92,7 @@ pub fn n_gauss(kind: ElemKind) -> usize {
 /// consistent tangent (3n×3n row-major, `k[(3a+i)*3n + 3b+j]`) of one element.
 ///
 /// `x0`: reference coordinates of the element nodes, `u`: nodal displacements.
-/// `state_old`/`state_new`: `n_gauss(kind) * mat.n_state()` history values (empty for
+/// `state_old`/`state_new`: `n_gauss(kind, form) * mat.n_state()` history values (empty for
 /// elastic models). `f` and `k` are overwritten, not accumulated.
 ///
 /// `form` selects F-bar for hex8 (see [`Formulation`]).
@@ -88,17 +116,45 @@ pub fn element_force(
     k: Option<&mut [f64]>,
 ) -> Result<(), ElementError> {
     match kind {
-        ElemKind::Hex8 => force_kernel(
-            &HEX8,
-            form == Formulation::FBar,
-            nodes(x0),
-            nodes(u),
-            mat,
-            state_old,
-            state_new,
-            f,
-            k,
-        ),
+        ElemKind::Hex8 => match form {
+            Formulation::Reduced { hourglass } => super::reduced::force(
+                nodes(x0),
+                nodes(u),
+                mat,
+                hourglass,
+                state_old,
+                state_new,
+                f,
+                k,
+            ),
+            _ => {
+                let mut k = k;
+                force_kernel(
+                    &HEX8,
+                    form.is_fbar(),
+                    nodes(x0),
+                    nodes(u),
+                    mat,
+                    state_old,
+                    state_new,
+                    f,
+                    k.as_deref_mut(),
+                )?;
+                match form {
+                    Formulation::FBar { hourglass } if hourglass > 0.0 => {
+                        super::reduced::add_hourglass(
+                            nodes(x0),
+                            nodes(u),
+                            mat.shear_modulus(),
+                            hourglass,
+                            f,
+                            k,
+                        )
+                    }
+                    _ => Ok(()),
+                }
+            }
+        },
         ElemKind::Tet4 => force_kernel(
             &TET4,
             false,
@@ -124,14 +180,10 @@ pub fn element_stress(
     state_old: &[f64],
 ) -> Result<[f64; 6], ElementError> {
     match kind {
-        ElemKind::Hex8 => stress_kernel(
-            &HEX8,
-            form == Formulation::FBar,
-            nodes(x0),
-            nodes(u),
-            mat,
-            state_old,
-        ),
+        ElemKind::Hex8 if matches!(form, Formulation::Reduced { .. }) => {
+            super::reduced::stress(nodes(x0), nodes(u), mat, state_old)
+        }
+        ElemKind::Hex8 => stress_kernel(&HEX8, form.is_fbar(), nodes(x0), nodes(u), mat, state_old),
         ElemKind::Tet4 => stress_kernel(&TET4, false, nodes(x0), nodes(u), mat, state_old),
     }
 }
@@ -250,7 +302,7 @@ fn diameter(x: &[[f64; 3]]) -> f64 {
 
 /// Cofactor matrix: A⁻ᵀ = cof(A) / det A without a failure branch.
 #[inline]
-fn cofactor(m: &Matrix3<f64>) -> Matrix3<f64> {
+pub(super) fn cofactor(m: &Matrix3<f64>) -> Matrix3<f64> {
     let c = |r0: usize, r1: usize, c0: usize, c1: usize| {
         m[(r0, c0)] * m[(r1, c1)] - m[(r0, c1)] * m[(r1, c0)]
     };
@@ -288,7 +340,10 @@ pub fn reference_gradients<const N: usize>(
 
 /// g_a ← M g_a for every node (M = J₀⁻ᵀ or F⁻ᵀ).
 #[inline]
-fn transform_gradients<const N: usize>(m: &Matrix3<f64>, g: &[[f64; 3]; N]) -> [[f64; 3]; N] {
+pub(super) fn transform_gradients<const N: usize>(
+    m: &Matrix3<f64>,
+    g: &[[f64; 3]; N],
+) -> [[f64; 3]; N] {
     let mut out = [[0.0; 3]; N];
     for (o, d) in out.iter_mut().zip(g) {
         for r in 0..3 {
@@ -317,7 +372,7 @@ pub fn deformation_gradient<const N: usize>(
 
 /// f_a += w τ g_a (τ symmetric, Voigt).
 #[inline]
-fn add_force<const N: usize>(g: &[[f64; 3]; N], s: &[f64; 6], w: f64, f: &mut [f64]) {
+pub(super) fn add_force<const N: usize>(g: &[[f64; 3]; N], s: &[f64; 6], w: f64, f: &mut [f64]) {
     for (fa, ga) in f.chunks_exact_mut(3).zip(g) {
         fa[0] += w * (s[0] * ga[0] + s[3] * ga[1] + s[5] * ga[2]);
         fa[1] += w * (s[3] * ga[0] + s[1] * ga[1] + s[4] * ga[2]);
@@ -327,14 +382,14 @@ fn add_force<const N: usize>(g: &[[f64; 3]; N], s: &[f64; 6], w: f64, f: &mut [f
 
 /// An element tangent on the stack, `[a][i][b][j]`: the same memory order as the
 /// row-major 3n×3n output, filled without bounds checks and copied once.
-type LocalTangent<const N: usize> = [[[[f64; 3]; N]; 3]; N];
+pub(super) type LocalTangent<const N: usize> = [[[[f64; 3]; N]; 3]; N];
 
 /// K_ab += w [B_aᵀ c B_b + (g_a · τ g_b) I] (geometric term only if `geometric`).
 ///
 /// B_a rows (xx, yy, zz, xy, yz, xz) = [g1 0 0; 0 g2 0; 0 0 g3; g2 g1 0; 0 g3 g2; g3 0 g1].
 #[inline]
 #[allow(clippy::needless_range_loop)] // index form mirrors the B-matrix algebra
-fn add_tangent<const N: usize>(
+pub(super) fn add_tangent<const N: usize>(
     g: &[[f64; 3]; N],
     sp: &StressPoint,
     geometric: bool,
@@ -475,7 +530,7 @@ fn element_kinematics<const N: usize, const G: usize>(
 }
 
 #[inline]
-fn reference_point<const N: usize>(
+pub(super) fn reference_point<const N: usize>(
     x0: &[[f64; 3]; N],
     dn: &[[f64; 3]; N],
     g: usize,
@@ -794,7 +849,13 @@ mod tests {
     fn tangent_matches_central_difference() {
         for (kind, x0) in cases() {
             for mat in mats() {
-                for form in [Formulation::Standard, Formulation::FBar] {
+                for form in [
+                    Formulation::Standard,
+                    Formulation::FBAR,
+                    Formulation::REDUCED,
+                    Formulation::FBar { hourglass: 2.0 },
+                    Formulation::Reduced { hourglass: 3.0 },
+                ] {
                     check_tangent(kind, form, &x0, &deform(&x0, &some_f(), 0.04), mat.as_ref());
                 }
             }
@@ -842,7 +903,7 @@ mod tests {
                 let (fs, _) = force(ElemKind::Hex8, &x0, &u, mat.as_ref(), false);
                 let (fb, _) = force_with(
                     ElemKind::Hex8,
-                    Formulation::FBar,
+                    Formulation::FBAR,
                     &x0,
                     &u,
                     mat.as_ref(),
@@ -863,7 +924,7 @@ mod tests {
                 .unwrap();
                 let sb = element_stress(
                     ElemKind::Hex8,
-                    Formulation::FBar,
+                    Formulation::FBAR,
                     &x0,
                     &u,
                     mat.as_ref(),
@@ -878,7 +939,7 @@ mod tests {
             let (fs, _) = force(ElemKind::Hex8, &x0, &u, mat.as_ref(), false);
             let (fb, _) = force_with(
                 ElemKind::Hex8,
-                Formulation::FBar,
+                Formulation::FBAR,
                 &x0,
                 &u,
                 mat.as_ref(),
@@ -922,8 +983,8 @@ mod tests {
             energy(Formulation::Standard, 0.4999),
         );
         let (b0, b1) = (
-            energy(Formulation::FBar, 0.3),
-            energy(Formulation::FBar, 0.4999),
+            energy(Formulation::FBAR, 0.3),
+            energy(Formulation::FBAR, 0.4999),
         );
         assert!(s1 / s0 > 100.0, "standard hex8 should lock: {s0} → {s1}");
         assert!(b1 / b0 < 2.0, "F-bar should not lock: {b0} → {b1}");
@@ -1134,7 +1195,7 @@ mod tests {
         let mut f = vec![0.0; 24];
         element_force(
             ElemKind::Hex8,
-            Formulation::FBar,
+            Formulation::FBAR,
             &hex(),
             &[[0.0; 3]; 8],
             &Probe,

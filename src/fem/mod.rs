@@ -3,5 +3,6 @@
 
 pub mod element;
 pub mod mass;
+pub mod reduced;
 pub mod shape;
 pub mod surface;

@@ -30,7 +30,8 @@ impl Solids {
         let mut s = 0;
         for e in 0..elements.len() {
             state_offset.push(s);
-            s += n_gauss(elements.kinds[e]) * built[elements.material[e] as usize].n_state();
+            s += n_gauss(elements.kinds[e], elements.formulation[e])
+                * built[elements.material[e] as usize].n_state();
         }
         state_offset.push(s);
         Self {

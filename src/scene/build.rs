@@ -105,12 +105,7 @@ pub fn build(deck: &Deck, deck_dir: &Path) -> Result<Scene> {
             ));
         };
         part_material.push(mi);
-        part_formulation.push(match p.formulation {
-            FormulationDeck::Standard => Formulation::Standard,
-            FormulationDeck::Fbar => Formulation::FBar,
-            FormulationDeck::Auto if materials[mi].1.wants_fbar() => Formulation::FBar,
-            FormulationDeck::Auto => Formulation::Standard,
-        });
+        part_formulation.push(part_formulation_of(p, &materials[mi].1, &f)?);
         let pm = part_mesh(&p.mesh, &f, pi as u32, deck_dir)?;
         // Reference-configuration validity of every element.
         for e in 0..pm.n_elems() {
@@ -988,4 +983,34 @@ fn material_def(m: &MaterialDeck, f: &str, deck: &Deck) -> Result<MaterialDef> {
             }
         }
     })
+}
+
+/// A part's element formulation with its hourglass coefficient; `hourglass` is refused
+/// where no hourglass spring exists (standard hex8) and must be finite and ≥ 0.
+fn part_formulation_of(p: &PartDeck, material: &MaterialDef, field: &str) -> Result<Formulation> {
+    let form = match p.formulation {
+        FormulationDeck::Standard => Formulation::Standard,
+        FormulationDeck::Fbar => Formulation::FBAR,
+        FormulationDeck::Reduced => Formulation::REDUCED,
+        FormulationDeck::Auto if material.wants_fbar() => Formulation::FBAR,
+        FormulationDeck::Auto => Formulation::Standard,
+    };
+    let Some(h) = p.hourglass else {
+        return Ok(form);
+    };
+    if !(h.is_finite() && h >= 0.0) {
+        return Err(err(
+            format!("{field}.hourglass"),
+            format!("expected a finite number ≥ 0, got {h}"),
+        ));
+    }
+    match form {
+        Formulation::FBar { .. } => Ok(Formulation::FBar { hourglass: h }),
+        Formulation::Reduced { .. } => Ok(Formulation::Reduced { hourglass: h }),
+        Formulation::Standard => Err(err(
+            format!("{field}.hourglass"),
+            "only F-bar and reduced hex8 have an hourglass spring; this part's elements are \
+             standard (set formulation = \"fbar\" or \"reduced\")",
+        )),
+    }
 }

@@ -194,6 +194,8 @@ pub enum FormulationDeck {
     Standard,
     /// F-bar (mean-dilatation J̄; B-bar for small strain).
     Fbar,
+    /// One point and hourglass stiffness (LS-DYNA's ELFORM 1): for large compression.
+    Reduced,
 }
 
 #[derive(Debug, Clone, Deserialize, Serialize)]
@@ -205,6 +207,9 @@ pub struct PartDeck {
     /// Volume treatment of hex8 elements (default auto).
     #[serde(default)]
     pub formulation: FormulationDeck,
+    /// Hourglass spring coefficient (F-bar: default 0; reduced: default 1).
+    #[serde(default)]
+    pub hourglass: Option<f64>,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize, Default)]
