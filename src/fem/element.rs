@@ -95,7 +95,8 @@ pub fn n_gauss(kind: ElemKind, form: Formulation) -> usize {
 /// `state_old`/`state_new`: `n_gauss(kind, form) * mat.n_state()` history values (empty for
 /// elastic models). `f` and `k` are overwritten, not accumulated.
 ///
-/// `form` selects F-bar for hex8 (see [`Formulation`]).
+/// `form` selects F-bar or the reduced element for hex8, with its hourglass spring (see
+/// [`Formulation`]).
 ///
 /// Finite kinematics: det F ≤ 0 at a point is an error. Small kinematics never checks
 /// det F: a linear model is defined for any displacement, and Newton's first trial on a
