@@ -19,7 +19,9 @@
 //! Rows of the constrained matrix arrive already constrained: [`DistMatrix::constrain`]
 //! zeroes the rows and the columns of constrained dofs in every rank's rows.
 
-use super::block_jacobi::{Factorization, FillOrdering, LocalBlockPattern, LocalFactor};
+use super::block_jacobi::{
+    FactorOptions, Factorization, FillOrdering, LocalBlockPattern, LocalFactor,
+};
 use super::{DistMatrix, Preconditioner};
 use crate::parallel::{Comm, HaloPlan};
 use crate::Error;
@@ -66,6 +68,20 @@ impl RestrictedSchwarz {
         mat: &DistMatrix,
         choice: Factorization,
         ordering: FillOrdering,
+    ) -> crate::Result<Self> {
+        let opts = FactorOptions {
+            factorization: choice,
+            ordering,
+            ..FactorOptions::default()
+        };
+        Self::with_factor_options(comm, mat, opts)
+    }
+
+    /// Collective; factored as `opts` says.
+    pub fn with_factor_options(
+        comm: &dyn Comm,
+        mat: &DistMatrix,
+        opts: FactorOptions,
     ) -> crate::Result<Self> {
         let layout = mat.layout();
         let (start, end) = (layout.start(), layout.end());
@@ -158,7 +174,7 @@ impl RestrictedSchwarz {
         let mut vals = Vec::with_capacity(mat.vals.len() + recv.len());
         vals.extend_from_slice(&mat.vals);
         vals.extend_from_slice(&recv);
-        let factor = LocalFactor::new("ASM", &pat, &vals, choice, ordering)?;
+        let factor = LocalFactor::new("ASM", &pat, &vals, opts)?;
         Ok(Self {
             n_own,
             n_ghost,

@@ -33,6 +33,7 @@
 //! means the block is singular to working precision and is reported as an `Err`.
 //! Factorization is local: callers agree on failure across ranks with `Comm::all_ok`.
 
+use super::condense::Condensation;
 use super::ordering::{self, Graph};
 use super::{DistMatrix, Preconditioner};
 use crate::parallel::Comm;
@@ -73,6 +74,26 @@ pub enum FillOrdering {
     Amd,
 }
 
+/// How a [`LocalFactor`] factors: the kind of factorization, the fill-reducing
+/// ordering, and whether attached blocks (contact multipliers) are condensed first
+/// ([`super::condense`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct FactorOptions {
+    pub factorization: Factorization,
+    pub ordering: FillOrdering,
+    pub condense: bool,
+}
+
+impl Default for FactorOptions {
+    fn default() -> Self {
+        Self {
+            factorization: Factorization::Auto,
+            ordering: FillOrdering::NestedDissection,
+            condense: true,
+        }
+    }
+}
+
 enum Factor {
     None,
     Lu(Box<SparseLu<usize, f64>>),
@@ -99,7 +120,12 @@ pub struct LocalBlockPattern {
 pub struct LocalFactor {
     /// Prefix of error messages ("block Jacobi", "ASM").
     label: &'static str,
+    /// Size of the factored (condensed) matrix.
     n: usize,
+    /// Size of the block (before condensation).
+    n_full: usize,
+    /// Attached blocks eliminated before factoring, if any.
+    cond: Option<Box<Condensation>>,
     /// Length of the value array the pattern indexes.
     vals_len: usize,
     choice: Factorization,
@@ -137,6 +163,7 @@ impl std::fmt::Debug for LocalFactor {
         f.debug_struct("LocalFactor")
             .field("label", &self.label)
             .field("n", &self.n)
+            .field("n_full", &self.n_full)
             .field("nnz", &self.src.len())
             .field("kind", &self.kind())
             .field("ordering", &self.ordering)
@@ -177,6 +204,18 @@ impl BlockJacobi {
         choice: Factorization,
         ordering: FillOrdering,
     ) -> crate::Result<Self> {
+        Self::with_factor_options(
+            mat,
+            FactorOptions {
+                factorization: choice,
+                ordering,
+                ..FactorOptions::default()
+            },
+        )
+    }
+
+    /// Factor `mat`'s local diagonal block as `opts` says.
+    pub fn with_factor_options(mat: &DistMatrix, opts: FactorOptions) -> crate::Result<Self> {
         let n_own = mat.layout().owned_len();
         let mut pat = LocalBlockPattern {
             n_nodes: n_own,
@@ -192,19 +231,19 @@ impl BlockJacobi {
             }
             pat.row_ptr.push(pat.cols.len());
         }
-        let f = LocalFactor::new("block Jacobi", &pat, &mat.vals, choice, ordering)?;
+        let f = LocalFactor::new("block Jacobi", &pat, &mat.vals, opts)?;
         Ok(Self { f })
     }
 
     /// Numeric refactorization for new values of the same pattern (symbolic reused).
     pub fn refactor(&mut self, mat: &DistMatrix) -> crate::Result<()> {
-        if mat.n_owned_dofs() != self.f.n || mat.vals.len() != self.f.vals_len {
+        if mat.n_owned_dofs() != self.f.n_full || mat.vals.len() != self.f.vals_len {
             return Err(Error::runtime(format!(
                 "block Jacobi: refactor with a different pattern ({} dofs, {} blocks; factored \
                  {} dofs, {} blocks)",
                 mat.n_owned_dofs(),
                 mat.nnz_blocks_local(),
-                self.f.n,
+                self.f.n_full,
                 self.f.vals_len / 9
             )));
         }
@@ -219,9 +258,16 @@ impl LocalFactor {
         label: &'static str,
         pat: &LocalBlockPattern,
         vals: &[f64],
-        choice: Factorization,
-        ordering: FillOrdering,
+        opts: FactorOptions,
     ) -> crate::Result<Self> {
+        let n_full = 3 * pat.n_nodes;
+        let cond = if opts.condense {
+            Condensation::find(pat).map(Box::new)
+        } else {
+            None
+        };
+        let pat = cond.as_ref().map_or(pat, |c| c.reduced());
+        let (choice, ordering) = (opts.factorization, opts.ordering);
         let n_nodes = pat.n_nodes;
         let n = 3 * n_nodes;
         // Column counts: every block entry in block column k puts 3 entries in each of
@@ -270,6 +316,8 @@ impl LocalFactor {
         let mut f = Self {
             label,
             n,
+            n_full,
+            cond,
             vals_len: vals.len(),
             choice,
             ordering,
@@ -309,11 +357,16 @@ impl LocalFactor {
         }
         let t = Instant::now();
         self.factor = Factor::None;
+        if let Some(c) = self.cond.as_deref_mut() {
+            c.reduce(vals)
+                .map_err(|e| Error::runtime(format!("{}: {e}", self.label)))?;
+        }
         if self.n == 0 {
             self.factorizations += 1;
             self.last_factor_seconds = 0.0;
             return Ok(());
         }
+        let vals = self.cond.as_deref().map_or(vals, |c| c.values());
         for (v, &s) in self.csc_vals.iter_mut().zip(&self.src) {
             *v = vals[s];
         }
@@ -484,8 +537,24 @@ impl LocalFactor {
         Ok(())
     }
 
-    /// z ← A⁻¹ z (length [`Self::n`]); no-op before a successful factorization.
+    /// z ← A⁻¹ z (length [`Self::n_full`]); no-op before a successful factorization.
     pub fn solve_in_place(&self, z: &mut [f64]) {
+        match self.cond.as_deref() {
+            None => self.solve_factored(z),
+            Some(c) => {
+                if matches!(self.factor, Factor::None) && self.n > 0 {
+                    return;
+                }
+                let mut x = Vec::with_capacity(self.n);
+                c.rhs(z, &mut x);
+                self.solve_factored(&mut x);
+                c.recover(&x, z);
+            }
+        }
+    }
+
+    /// x ← M⁻¹ x for the factored (condensed) matrix M (length [`Self::n`]).
+    fn solve_factored(&self, z: &mut [f64]) {
         let col = faer::ColMut::from_slice_mut(z);
         match &self.factor {
             Factor::None => {}
@@ -527,7 +596,7 @@ impl LocalFactor {
                 z[ri[p]] += self.csc_vals[p];
             }
         }
-        self.solve_in_place(&mut z);
+        self.solve_factored(&mut z);
         let err = z.iter().map(|v| (v - 1.0).abs()).fold(0.0f64, |m, e| {
             if e.is_nan() {
                 f64::INFINITY
@@ -555,9 +624,17 @@ impl LocalFactor {
             Factor::Llt => Factorization::Cholesky,
         }
     }
-    /// Size of the factored block (scalar dofs).
+    /// Size of the factored block (scalar dofs, after condensation).
     pub fn n(&self) -> usize {
         self.n
+    }
+    /// Size of the block (scalar dofs, before condensation).
+    pub fn n_full(&self) -> usize {
+        self.n_full
+    }
+    /// Block rows eliminated by the condensation ([`super::condense`]).
+    pub fn condensed_blocks(&self) -> usize {
+        self.cond.as_ref().map_or(0, |c| c.n_condensed())
     }
     /// Scalar nonzeros of the factored block.
     pub fn nnz(&self) -> usize {
@@ -819,6 +896,162 @@ pub(crate) mod tests {
         let m2 = tridiag(11, 1, 6.0);
         let mut bj = BlockJacobi::new(&m1).unwrap();
         assert!(bj.refactor(&m2).is_err());
+    }
+
+    type Mat3 = [[f64; 3]; 3];
+
+    /// `base` (one rank, SPD) with three multipliers attached to each of `nodes`, as an
+    /// ALM wall assembles them (walls.rs): in the frame P of a tilted normal, the
+    /// law's ∂h/∂g = `hg` and ∂h/∂λ = `hl` give B = −κ P (I − hl), C = −κ hg Pᵀ and
+    /// D = −κ (hl + 10⁻⁸ I). `kinds[j % kinds.len()]` picks each node's (hg, hl).
+    fn with_multipliers(base: &DistMatrix, nodes: &[usize], kinds: &[(Mat3, Mat3)]) -> DistMatrix {
+        let n0 = base.layout().owned_len();
+        let n = n0 + nodes.len();
+        let mut pairs: Vec<(usize, usize)> = (0..n0)
+            .flat_map(|i| base.cols_of_row(i).iter().map(move |&k| (i, k)))
+            .collect();
+        for (j, &a) in nodes.iter().enumerate() {
+            pairs.extend_from_slice(&[(a, n0 + j), (n0 + j, a), (n0 + j, n0 + j)]);
+        }
+        let mut m = DistMatrix::new(&SerialComm, Layout::from_counts(&[n], 0), &pairs);
+        for i in 0..n0 {
+            for (q, &k) in base.cols_of_row(i).iter().enumerate() {
+                let e = base.row_ptr[i] + q;
+                let v: [f64; 9] = std::array::from_fn(|c| base.vals[9 * e + c]);
+                m.add_block(i, k, &v);
+            }
+        }
+        let kappa = 7.0 * (0..n0).map(|i| base.block(i, i).unwrap()[0]).sum::<f64>() / n0 as f64;
+        let (c, s) = (0.8f64, 0.6f64);
+        // Columns: normal, t1, t2.
+        let p = [[c, -s, 0.0], [0.0, 0.0, 1.0], [s, c, 0.0]];
+        let mul = |a: &[[f64; 3]; 3], b: &[[f64; 3]; 3]| -> [[f64; 3]; 3] {
+            std::array::from_fn(|i| {
+                std::array::from_fn(|k| (0..3).map(|l| a[i][l] * b[l][k]).sum())
+            })
+        };
+        let pt: [[f64; 3]; 3] = std::array::from_fn(|i| std::array::from_fn(|k| p[k][i]));
+        let flat =
+            |a: [[f64; 3]; 3], f: f64| -> [f64; 9] { std::array::from_fn(|q| f * a[q / 3][q % 3]) };
+        for (j, &a) in nodes.iter().enumerate() {
+            let (hg, hl) = kinds[j % kinds.len()];
+            let i_hl: [[f64; 3]; 3] =
+                std::array::from_fn(|i| std::array::from_fn(|k| f64::from(i == k) - hl[i][k]));
+            let d: [[f64; 3]; 3] = std::array::from_fn(|i| {
+                std::array::from_fn(|k| hl[i][k] + 1e-8 * f64::from(i == k))
+            });
+            m.add_block(a, n0 + j, &flat(mul(&p, &i_hl), -kappa));
+            m.add_block(n0 + j, a, &flat(mul(&hg, &pt), -kappa));
+            m.add_block(n0 + j, n0 + j, &flat(d, -kappa));
+        }
+        m.finish_assembly(&SerialComm);
+        m
+    }
+
+    const I3: [[f64; 3]; 3] = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+    const Z3: [[f64; 3]; 3] = [[0.0; 3]; 3];
+    const NORMAL: [[f64; 3]; 3] = [[1.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0]];
+    const FREE_T: [[f64; 3]; 3] = [[0.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+
+    /// GMRES iterations to a relative residual of 1e-12 with `bj` on `m`.
+    fn gmres_iterations(m: &DistMatrix, bj: &BlockJacobi, r: &[f64]) -> usize {
+        let mut x = vec![0.0; r.len()];
+        let opts = crate::linalg::GmresOptions {
+            rtol: 1e-12,
+            ..Default::default()
+        };
+        let st = crate::linalg::gmres(&SerialComm, &mut { m }, bj, r, &mut x, &opts).unwrap();
+        assert!(st.converged, "{st:?}");
+        st.iterations
+    }
+
+    #[test]
+    fn attached_multipliers_are_condensed_to_a_cholesky_factor() {
+        let base = elasticity_cube(&SerialComm, 3, &[64]);
+        let nodes: Vec<usize> = (48..64).collect();
+        // Sticking (h = g), open (h = λ), active and frictionless (normal h = g,
+        // tangential h = λ).
+        let kinds = [(I3, Z3), (Z3, I3), (NORMAL, FREE_T)];
+        let m = with_multipliers(&base, &nodes, &kinds);
+        let n = 3 * (64 + nodes.len());
+        let r: Vec<f64> = (0..n).map(|i| (i as f64 * 0.37).cos()).collect();
+
+        let bj = BlockJacobi::new(&m).unwrap();
+        assert_eq!(bj.condensed_blocks(), nodes.len());
+        assert_eq!((bj.n(), bj.n_full()), (192, n));
+        assert_eq!(bj.kind(), Factorization::Cholesky);
+        // Exact but for the regularization δ of the constraint directions and round-off.
+        let mut z = vec![0.0; n];
+        bj.apply(&SerialComm, &r, &mut z);
+        let res = residual(&m, &z, &r);
+        assert!(res < 1e-4, "{res:e}");
+        assert!(gmres_iterations(&m, &bj, &r) <= 3);
+
+        // As assembled: a saddle point, factored by LU, one iteration.
+        let opts = FactorOptions {
+            condense: false,
+            ..FactorOptions::default()
+        };
+        let full = BlockJacobi::with_factor_options(&m, opts).unwrap();
+        assert_eq!((full.condensed_blocks(), full.n()), (0, n));
+        assert_eq!(full.kind(), Factorization::Lu);
+        full.apply(&SerialComm, &r, &mut z);
+        assert!(residual(&m, &z, &r) < 1e-10);
+        // The same solution.
+        let mut zc = vec![0.0; n];
+        bj.apply(&SerialComm, &r, &mut zc);
+        let diff = z
+            .iter()
+            .zip(&zc)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f64::max);
+        let size = z.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        assert!(diff < 1e-4 * size, "{diff:e} vs {size:e}");
+    }
+
+    #[test]
+    fn slipping_multipliers_condense_to_a_nonsymmetric_block() {
+        let base = elasticity_cube(&SerialComm, 3, &[64]);
+        let nodes: Vec<usize> = (48..64).collect();
+        // Slip: the tangential rows depend on λ_N through the threshold and turn with
+        // the slip direction; ∂h/∂g is not ∂h/∂λ's complement (non-symmetric).
+        let hl = [[0.0, 0.0, 0.0], [-0.1, 0.7, 0.2], [0.05, 0.2, 0.9]];
+        let hg = [[1.0, 0.0, 0.0], [0.0, 0.3, -0.2], [0.0, -0.2, 0.1]];
+        let m = with_multipliers(&base, &nodes, &[(hg, hl), (I3, Z3)]);
+        let n = 3 * (64 + nodes.len());
+        let r: Vec<f64> = (0..n).map(|i| (i as f64 * 0.11).sin()).collect();
+        let bj = BlockJacobi::new(&m).unwrap();
+        assert_eq!(bj.condensed_blocks(), nodes.len());
+        assert_eq!(bj.kind(), Factorization::Lu);
+        assert!(gmres_iterations(&m, &bj, &r) <= 3);
+    }
+
+    #[test]
+    fn rows_coupled_to_more_than_one_node_are_not_condensed() {
+        // Every row of the tridiagonal matrix couples to two others.
+        assert_eq!(
+            BlockJacobi::new(&tridiag(10, 1, 6.0))
+                .unwrap()
+                .condensed_blocks(),
+            0
+        );
+        // A multiplier block coupled to two nodes (as a rigid body's DOFs would be).
+        let base = elasticity_cube(&SerialComm, 2, &[27]);
+        let mut pairs: Vec<(usize, usize)> = (0..27)
+            .flat_map(|i| base.cols_of_row(i).iter().map(move |&k| (i, k)))
+            .collect();
+        pairs.extend_from_slice(&[(27, 27), (27, 3), (3, 27), (27, 5), (5, 27)]);
+        let mut m = DistMatrix::new(&SerialComm, Layout::from_counts(&[28], 0), &pairs);
+        for i in 0..27 {
+            for (q, &k) in base.cols_of_row(i).iter().enumerate() {
+                let e = base.row_ptr[i] + q;
+                let v: [f64; 9] = std::array::from_fn(|c| base.vals[9 * e + c]);
+                m.add_block(i, k, &v);
+            }
+        }
+        m.add_block(27, 27, &[1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0]);
+        m.finish_assembly(&SerialComm);
+        assert_eq!(BlockJacobi::new(&m).unwrap().condensed_blocks(), 0);
     }
 
     /// Stiffness of a trilinear hex8 cube of side `h` (isotropic linear elasticity,

@@ -9,12 +9,15 @@
 
 pub mod asm;
 pub mod block_jacobi;
+pub mod condense;
 pub mod gmres;
 pub mod matrix;
 pub mod ordering;
 
 pub use asm::RestrictedSchwarz;
-pub use block_jacobi::{BlockJacobi, Factorization, FillOrdering, LocalBlockPattern, LocalFactor};
+pub use block_jacobi::{
+    BlockJacobi, FactorOptions, Factorization, FillOrdering, LocalBlockPattern, LocalFactor,
+};
 pub use gmres::{gmres, GmresOptions, GmresStats};
 
 pub use matrix::DistMatrix;
@@ -90,41 +93,42 @@ impl PcKind {
     }
 }
 
-/// A preconditioner of the given kind, to be set up on a matrix.
-pub fn preconditioner(kind: PcKind) -> Box<dyn Preconditioner> {
+/// A preconditioner of the given kind, to be set up on a matrix; a factored one
+/// factors its local matrix as `opts` says.
+pub fn preconditioner(kind: PcKind, opts: FactorOptions) -> Box<dyn Preconditioner> {
     match kind {
-        PcKind::BlockJacobi => Box::new(OnFirstSetup::<BlockJacobi>(None)),
-        PcKind::Asm => Box::new(OnFirstSetup::<RestrictedSchwarz>(None)),
+        PcKind::BlockJacobi => Box::new(OnFirstSetup::<BlockJacobi>(None, opts)),
+        PcKind::Asm => Box::new(OnFirstSetup::<RestrictedSchwarz>(None, opts)),
         PcKind::None => Box::new(Identity),
     }
 }
 
 /// A factored preconditioner built from its first matrix.
 trait Build: Preconditioner + Sized {
-    fn build(comm: &dyn Comm, k: &DistMatrix) -> crate::Result<Self>;
+    fn build(comm: &dyn Comm, k: &DistMatrix, opts: FactorOptions) -> crate::Result<Self>;
 }
 
 impl Build for BlockJacobi {
-    fn build(_comm: &dyn Comm, k: &DistMatrix) -> crate::Result<Self> {
-        BlockJacobi::new(k)
+    fn build(_comm: &dyn Comm, k: &DistMatrix, opts: FactorOptions) -> crate::Result<Self> {
+        BlockJacobi::with_factor_options(k, opts)
     }
 }
 
 impl Build for RestrictedSchwarz {
-    fn build(comm: &dyn Comm, k: &DistMatrix) -> crate::Result<Self> {
-        RestrictedSchwarz::new(comm, k)
+    fn build(comm: &dyn Comm, k: &DistMatrix, opts: FactorOptions) -> crate::Result<Self> {
+        RestrictedSchwarz::with_factor_options(comm, k, opts)
     }
 }
 
 /// Built (symbolic and numeric) at the first setup, refactored at the next ones.
-struct OnFirstSetup<P>(Option<P>);
+struct OnFirstSetup<P>(Option<P>, FactorOptions);
 
 impl<P: Build> Preconditioner for OnFirstSetup<P> {
     fn setup(&mut self, comm: &dyn Comm, k: &DistMatrix) -> crate::Result<()> {
         match &mut self.0 {
             Some(p) => p.setup(comm, k),
             None => {
-                self.0 = Some(P::build(comm, k)?);
+                self.0 = Some(P::build(comm, k, self.1)?);
                 Ok(())
             }
         }

@@ -625,6 +625,7 @@ fn run_settings(deck: &Deck) -> RunSettings {
             },
             preconditioner: s.linear.preconditioner,
             pc_lag: s.linear.lag,
+            condense: s.linear.condense,
             bfgs_reform: s.bfgs_reform,
             fd_delta: s.fd_delta,
             fd_rule: s.fd_step,

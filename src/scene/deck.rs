@@ -560,6 +560,10 @@ pub struct LinearDeck {
     /// factorization under which GMRES fails is refreshed at once.
     #[serde(default)]
     pub lag: usize,
+    /// Eliminate contact multipliers node by node before factoring (block Jacobi, ASM;
+    /// `linalg::condense`); false factors the saddle-point block as assembled.
+    #[serde(default = "yes")]
+    pub condense: bool,
 }
 
 fn d_lrtol() -> f64 {
@@ -580,6 +584,7 @@ impl Default for LinearDeck {
             max_iterations: d_lmax(),
             preconditioner: PcKind::BlockJacobi,
             lag: 0,
+            condense: true,
         }
     }
 }
@@ -602,6 +607,9 @@ pub struct OutputDeck {
     pub displacements: Vec<String>,
 }
 
+fn yes() -> bool {
+    true
+}
 fn one() -> usize {
     1
 }

@@ -95,7 +95,7 @@ pub fn run_static(
     u.resize(n, 0.0);
     let mut r = vec![0.0; n];
     let mut k = model.new_matrix(comm);
-    let mut pc = Preconditioning::new(opts.preconditioner, opts.pc_lag);
+    let mut pc = Preconditioning::new(opts.preconditioner, opts.pc_lag, opts.condense);
     let mut tot = RunTotals::default();
     let mut t0 = Instant::now();
     while let Some((_, t)) = ctl.next() {

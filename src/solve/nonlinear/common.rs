@@ -384,6 +384,7 @@ mod tests {
             linear: GmresOptions::default(),
             preconditioner: crate::linalg::PcKind::BlockJacobi,
             pc_lag: 0,
+            condense: true,
             bfgs_reform: 11,
             fd_delta: 1e-4,
             fd_rule: FdRule::Element,

@@ -74,6 +74,8 @@ pub struct NonlinearOptions {
     pub preconditioner: PcKind,
     /// Newton: iterations a factorization is kept for (0 = every iteration).
     pub pc_lag: usize,
+    /// Condense contact multipliers node by node in the factored preconditioners.
+    pub condense: bool,
     /// BFGS: reform (reassemble and refactor) the stiffness every n iterations.
     pub bfgs_reform: usize,
     /// JFNK: relative perturbation δ and the rule for ε.

@@ -5,11 +5,12 @@
 //! preconditioner itself ([`crate::linalg::Preconditioner`], created by name) only sets
 //! up and applies.
 
-use crate::linalg::{preconditioner, DistMatrix, PcKind, Preconditioner};
+use crate::linalg::{preconditioner, DistMatrix, FactorOptions, PcKind, Preconditioner};
 use crate::parallel::Comm;
 
 pub struct Preconditioning {
     kind: PcKind,
+    opts: FactorOptions,
     pc: Box<dyn Preconditioner>,
     /// A successful setup is in place.
     ready: bool,
@@ -21,10 +22,17 @@ pub struct Preconditioning {
 }
 
 impl Preconditioning {
-    pub fn new(kind: PcKind, lag: usize) -> Self {
+    /// `condense`: eliminate contact multipliers node by node before factoring
+    /// ([`crate::linalg::condense`]).
+    pub fn new(kind: PcKind, lag: usize, condense: bool) -> Self {
+        let opts = FactorOptions {
+            condense,
+            ..FactorOptions::default()
+        };
         Self {
             kind,
-            pc: preconditioner(kind),
+            opts,
+            pc: preconditioner(kind, opts),
             ready: false,
             lag,
             uses: 0,
@@ -55,7 +63,7 @@ impl Preconditioning {
         }
         let res = self.pc.setup(comm, k);
         if !comm.all_ok(res.is_ok()) {
-            self.pc = preconditioner(self.kind);
+            self.pc = preconditioner(self.kind, self.opts);
             self.ready = false;
             let what = match self.kind {
                 PcKind::Asm => "ASM",
@@ -104,7 +112,7 @@ mod tests {
             let r: Vec<f64> = (0..n).map(|i| (i as f64).cos()).collect();
             let mut z = [vec![0.0; n], vec![0.0; n]];
             for (i, kind) in [PcKind::Asm, PcKind::BlockJacobi].into_iter().enumerate() {
-                let mut pc = Preconditioning::new(kind, 1);
+                let mut pc = Preconditioning::new(kind, 1, true);
                 assert_eq!(pc.update(c, &m), Ok(true));
                 assert_eq!(pc.update(c, &m), Ok(false));
                 assert_eq!(pc.update(c, &m), Ok(true));
@@ -115,7 +123,7 @@ mod tests {
             }
             let d: Vec<f64> = z[0].iter().zip(&z[1]).map(|(a, b)| a - b).collect();
             assert!(c.norm2(&d) > 1e-6 * c.norm2(&z[1]));
-            let mut none = Preconditioning::new(PcKind::None, 0);
+            let mut none = Preconditioning::new(PcKind::None, 0, true);
             assert_eq!(none.update(c, &m), Ok(false));
             assert!(!none.is_factored());
             let mut y = vec![0.0; n];

@@ -147,7 +147,7 @@ pub fn run_implicit(
     let mass = mass_operator(comm, model, analysis.mass);
     let n = model.n_owned_dofs();
     let mut k = model.new_matrix(comm);
-    let mut pc = Preconditioning::new(opts.preconditioner, opts.pc_lag);
+    let mut pc = Preconditioning::new(opts.preconditioner, opts.pc_lag, opts.condense);
     let mut tot = RunTotals::default();
     let t_start = Instant::now();
 
