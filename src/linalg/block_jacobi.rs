@@ -3,7 +3,9 @@
 //!
 //! Two factorizations:
 //! * **LU** (COLAMD column ordering, partial pivoting): any nonsingular block, including
-//!   non-symmetric ones (friction) and saddle points (contact multiplier rows).
+//!   non-symmetric ones (friction, F-bar) and saddle points (contact multiplier rows, when
+//!   [`FactorOptions::condense`] is off; by default they are eliminated node by node
+//!   first, [`super::condense`]).
 //! * **Cholesky** LLᵀ: symmetric positive definite blocks (a stiffness with Dirichlet
 //!   rows). Ordered by default with METIS nested dissection of the node graph
 //!   ([`FillOrdering::NestedDissection`], see [`super::ordering`]); on a 3D hex8
