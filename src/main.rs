@@ -24,8 +24,9 @@ usage:
   alfe partition SCENE|DECK --ranks N [--partitions DIR]
                                          write the METIS partition to the cache
   alfe bench-linear [--cells NX,NY,NZ] [--rtol R] [--json FILE] [--export DIR]
-                                         linear-elastic block: assembly, block-Jacobi, GMRES,
-                                         HDF5 rates (scripts/bench-core uses it)
+                    [--pc block-jacobi|asm|amg [--rigid-body-modes]]
+                                         linear-elastic block: assembly, preconditioner set-up,
+                                         GMRES, HDF5 rates (scripts/bench-core uses it)
   alfe bench-residual [--cells NX,NY,NZ] [--reps N] [--json FILE]
                                          residual/tangent rates per material and formulation
 
@@ -214,13 +215,19 @@ fn main_inner(comm: &dyn Comm, raw: &[String]) -> Result<()> {
             Ok(())
         }
         "bench-linear" => {
-            let a = parse_args(rest, &["cells", "rtol", "json", "export"], &[])?;
+            let a = parse_args(
+                rest,
+                &["cells", "rtol", "json", "export", "pc"],
+                &["rigid-body-modes"],
+            )?;
             alfe::bench::bench_linear(
                 comm,
                 a.get("cells"),
                 a.get("rtol"),
                 a.get("json"),
                 a.get("export"),
+                a.get("pc"),
+                a.has("rigid-body-modes"),
             )
         }
         "bench-residual" => {

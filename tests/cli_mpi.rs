@@ -943,3 +943,85 @@ fn coupled_cantilever_same_on_one_and_two_ranks_with_the_tip_face_split() {
         }
     }
 }
+
+/// hypre's BoomerAMG on the linear-elastic block: converges to the asked true residual
+/// on 1 and 2 ranks, and its GMRES iterations barely grow with the rank count, where
+/// block Jacobi's go from 1 (one block: a direct solve) to ~90 on this mesh.
+#[test]
+fn amg_iterations_flat_from_one_to_two_ranks() {
+    let dir = temp_dir("amg-block");
+    let mut its = Vec::new();
+    for ranks in [1, 2] {
+        let json = format!("amg{ranks}.json");
+        ok(alfe(
+            &dir,
+            ranks,
+            &[
+                "bench-linear",
+                "--cells",
+                "20,20,20",
+                "--rtol",
+                "1e-8",
+                "--pc",
+                "amg",
+                "--json",
+                &json,
+            ],
+        ));
+        let b: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(dir.join(&json)).unwrap()).unwrap();
+        assert_eq!(b["preconditioner"], "amg");
+        assert_eq!(b["gmres_converged"], true);
+        let true_rel = b["true_relative_residual"].as_f64().unwrap();
+        assert!(true_rel <= 1e-8 * 1.001, "true residual {true_rel:e}");
+        its.push(b["gmres_iterations"].as_u64().unwrap());
+    }
+    assert!(its[0] > 1 && its[0] <= 30, "AMG on 1 rank: {its:?}");
+    assert!(
+        its[1] <= its[0] + 6,
+        "AMG iterations grew with ranks: {its:?}"
+    );
+}
+
+/// `hertz-sphere` (ALM, contact multipliers condensed for AMG) with
+/// `preconditioner = "amg"` on 2 ranks: the same Newton iterations and wall force as the
+/// recorded block-Jacobi run, in few GMRES iterations per Newton iteration.
+#[test]
+fn hertz_sphere_with_amg_on_two_ranks_matches_block_jacobi() {
+    let dir = temp_dir("hertz-amg");
+    let deck = builtin("hertz-sphere") + "\n[solver.linear]\npreconditioner = \"amg\"\n";
+    std::fs::write(dir.join("hertz.toml"), deck).unwrap();
+    ok(alfe(
+        &dir,
+        2,
+        &["run", "hertz.toml", "--quiet", "--out", "out"],
+    ));
+    let s: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("out/summary.json")).unwrap())
+            .unwrap();
+    let base: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(
+            Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/baseline/hertz-sphere.1.json"),
+        )
+        .unwrap(),
+    )
+    .unwrap();
+    let fz = s["walls"]["sphere"]["force"][2].as_f64().unwrap();
+    let fz_bj = base["history"]["sphere.fz"]
+        .as_array()
+        .unwrap()
+        .last()
+        .unwrap();
+    let fz_bj = fz_bj.as_f64().unwrap();
+    assert!(
+        rel_err(fz, fz_bj) < 1e-7,
+        "AMG {fz} vs block Jacobi {fz_bj}"
+    );
+    let newton = s["nonlinear_iterations"].as_u64().unwrap();
+    assert_eq!(newton, base["nonlinear_iterations"].as_u64().unwrap());
+    let gmres = s["linear_iterations"].as_u64().unwrap();
+    assert!(
+        gmres <= 45 * newton,
+        "{gmres} GMRES iterations for {newton} Newton"
+    );
+}

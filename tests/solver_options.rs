@@ -102,3 +102,24 @@ fn a_too_large_first_step_is_rescued_by_retries() {
         out.steps.iter().map(|s| s.time).collect::<Vec<_>>()
     );
 }
+
+/// AMG needs an elliptic matrix: a deck whose couplings add multipliers that cannot be
+/// condensed is refused before the run, naming the deck field (exit code 2), not left
+/// to fail in the middle of a step.
+#[test]
+fn amg_with_couplings_is_refused_naming_the_field() {
+    let text = edit(
+        &builtin("coupled-cantilever"),
+        "[solver.linear]\n",
+        "[solver.linear]\npreconditioner = \"amg\"\n",
+    );
+    let e = try_run_deck("amg-coupling", &text)
+        .err()
+        .expect("must fail");
+    let msg = e.to_string();
+    assert_eq!(e.exit_code(), 2, "{msg}");
+    assert!(
+        msg.contains("[solver.linear] preconditioner") && msg.contains("couplings"),
+        "{msg}"
+    );
+}

@@ -218,21 +218,7 @@ impl BlockJacobi {
 
     /// Factor `mat`'s local diagonal block as `opts` says.
     pub fn with_factor_options(mat: &DistMatrix, opts: FactorOptions) -> crate::Result<Self> {
-        let n_own = mat.layout().owned_len();
-        let mut pat = LocalBlockPattern {
-            n_nodes: n_own,
-            row_ptr: Vec::with_capacity(n_own + 1),
-            cols: Vec::new(),
-            entries: Vec::new(),
-        };
-        pat.row_ptr.push(0);
-        for i in 0..n_own {
-            for e in mat.diag_begin[i]..mat.diag_end[i] {
-                pat.cols.push(mat.lcol[e] as usize);
-                pat.entries.push(e);
-            }
-            pat.row_ptr.push(pat.cols.len());
-        }
+        let pat = diagonal_pattern(mat);
         let f = LocalFactor::new("block Jacobi", &pat, &mat.vals, opts)?;
         Ok(Self { f })
     }
@@ -251,6 +237,26 @@ impl BlockJacobi {
         }
         self.f.refactor(&mat.vals)
     }
+}
+
+/// The owned diagonal block of `k` as a local block pattern over its value array.
+pub(crate) fn diagonal_pattern(k: &DistMatrix) -> LocalBlockPattern {
+    let n_own = k.layout().owned_len();
+    let mut pat = LocalBlockPattern {
+        n_nodes: n_own,
+        row_ptr: Vec::with_capacity(n_own + 1),
+        cols: Vec::new(),
+        entries: Vec::new(),
+    };
+    pat.row_ptr.push(0);
+    for i in 0..n_own {
+        for e in k.diag_begin[i]..k.diag_end[i] {
+            pat.cols.push(k.lcol[e] as usize);
+            pat.entries.push(e);
+        }
+        pat.row_ptr.push(pat.cols.len());
+    }
+    pat
 }
 
 impl LocalFactor {
@@ -360,7 +366,7 @@ impl LocalFactor {
         let t = Instant::now();
         self.factor = Factor::None;
         if let Some(c) = self.cond.as_deref_mut() {
-            c.reduce(vals)
+            c.reduce(vals, super::condense::REGULARIZATION)
                 .map_err(|e| Error::runtime(format!("{}: {e}", self.label)))?;
         }
         if self.n == 0 {

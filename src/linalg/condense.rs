@@ -37,8 +37,8 @@
 
 use super::block_jacobi::LocalBlockPattern;
 
-/// The relative regularization δ of singular attached diagonal blocks (see the module
-/// documentation).
+/// The relative regularization δ of singular attached diagonal blocks before an exact
+/// factorization (see the module documentation).
 pub const REGULARIZATION: f64 = 1e-6;
 
 /// One attached block row `m` and its node `a`, with the entries of its blocks.
@@ -195,6 +195,10 @@ impl Condensation {
     pub fn reduced(&self) -> &LocalBlockPattern {
         &self.reduced
     }
+    /// The kept block rows (reduced index → original index).
+    pub fn kept(&self) -> &[usize] {
+        &self.kept
+    }
     /// Block rows eliminated.
     pub fn n_condensed(&self) -> usize {
         self.pairs.len()
@@ -205,8 +209,10 @@ impl Condensation {
     }
 
     /// Form the reduced matrix K − B D̃⁻¹ C for the values `vals` of the original
-    /// pattern. Err names the local block row whose D̃ is singular.
-    pub fn reduce(&mut self, vals: &[f64]) -> Result<(), String> {
+    /// pattern, with the relative regularization δ = `delta` ([`REGULARIZATION`] for a
+    /// factorization, [`super::amg::AMG_REGULARIZATION`] for AMG). Err names the local
+    /// block row whose D̃ is singular.
+    pub fn reduce(&mut self, vals: &[f64], delta: f64) -> Result<(), String> {
         for (e, &s) in self.red_src.iter().enumerate() {
             self.values[9 * e..9 * e + 9].copy_from_slice(&vals[9 * s..9 * s + 9]);
         }
@@ -220,7 +226,7 @@ impl Condensation {
                 .fold(0.0f64, |m, v| m.max(v.abs()));
             let sigma = if d[0] + d[4] + d[8] > 0.0 { 1.0 } else { -1.0 };
             for i in 0..3 {
-                d[4 * i] += sigma * REGULARIZATION * s;
+                d[4 * i] += sigma * delta * s;
             }
             let dinv = inverse3(&d).ok_or_else(|| {
                 format!(

@@ -1,18 +1,23 @@
-//! Distributed sparse linear algebra: block-sparse matrix, GMRES, block Jacobi and
-//! restricted additive Schwarz preconditioners. It knows the parallel layer, no physics.
+//! Distributed sparse linear algebra: block-sparse matrix, GMRES, block Jacobi,
+//! restricted additive Schwarz and algebraic multigrid (hypre's BoomerAMG)
+//! preconditioners. It knows the parallel layer, no physics.
 //!
 //! Vectors are distributed by their owned parts (the scalar slice of the rank's
 //! contiguous range). The seams are [`LinearOperator`] (an assembled matrix, or a
 //! matrix-free Jacobian product that evaluates a residual and may fail) and
 //! [`Preconditioner`] (block Jacobi is local; restricted additive Schwarz does one halo
-//! exchange per application).
+//! exchange per application; AMG's V-cycle communicates on every level).
 
+pub mod amg;
 pub mod asm;
 pub mod block_jacobi;
 pub mod condense;
 pub mod gmres;
+mod hypre;
 pub mod matrix;
 pub mod ordering;
+
+pub use amg::{BoomerAmg, NodePoints};
 
 pub use asm::RestrictedSchwarz;
 pub use block_jacobi::{
@@ -79,6 +84,9 @@ pub enum PcKind {
     /// Restricted additive Schwarz with one layer of overlap (the ghost nodes,
     /// [`RestrictedSchwarz`]).
     Asm,
+    /// Algebraic multigrid ([`BoomerAmg`], hypre): one V-cycle on the condensed
+    /// displacement matrix with the rigid-body rotations as near-null space.
+    Amg,
     /// None: z = r.
     None,
 }
@@ -88,17 +96,24 @@ impl PcKind {
         match self {
             PcKind::BlockJacobi => "block-jacobi",
             PcKind::Asm => "asm",
+            PcKind::Amg => "amg",
             PcKind::None => "none",
         }
     }
 }
 
 /// A preconditioner of the given kind, to be set up on a matrix; a factored one
-/// factors its local matrix as `opts` says.
-pub fn preconditioner(kind: PcKind, opts: FactorOptions) -> Box<dyn Preconditioner> {
+/// factors its local matrix as `opts` says; AMG builds its near-null space from `points`
+/// (the owned nodes' coordinates, when the unknowns are displacements).
+pub fn preconditioner(
+    kind: PcKind,
+    opts: FactorOptions,
+    points: Option<NodePoints>,
+) -> Box<dyn Preconditioner> {
     match kind {
         PcKind::BlockJacobi => Box::new(OnFirstSetup::<BlockJacobi>(None, opts)),
         PcKind::Asm => Box::new(OnFirstSetup::<RestrictedSchwarz>(None, opts)),
+        PcKind::Amg => Box::new(BoomerAmg::new(points)),
         PcKind::None => Box::new(Identity),
     }
 }

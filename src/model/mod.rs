@@ -258,6 +258,12 @@ impl Model {
         self.dofs.n_owned_dofs()
     }
 
+    /// Reference coordinates of the owned nodes, whose displacements are the first owned
+    /// blocks (AMG's rigid-body modes).
+    pub fn node_points(&self) -> crate::linalg::NodePoints {
+        std::sync::Arc::new(self.mesh.coords[..self.mesh.n_owned()].to_vec())
+    }
+
     /// The owned node dofs (the first `3 · n_owned` unknowns of the owned range).
     pub fn n_node_dofs(&self) -> usize {
         self.dofs.n_node_dofs()

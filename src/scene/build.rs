@@ -508,6 +508,14 @@ pub fn build(deck: &Deck, deck_dir: &Path) -> Result<Scene> {
         },
     )?;
 
+    if !deck.couplings.is_empty() && deck.solver.linear.preconditioner == crate::linalg::PcKind::Amg
+    {
+        return Err(err(
+            "[solver.linear] preconditioner",
+            "\"amg\" needs an elliptic matrix, but the [[couplings]] add constraint \
+             multipliers that cannot be condensed node by node; use \"block-jacobi\" or \"asm\"",
+        ));
+    }
     let couplings = super::coupling::build_couplings(
         &deck.couplings,
         &super::coupling::CouplingInputs {
@@ -626,6 +634,7 @@ fn run_settings(deck: &Deck) -> RunSettings {
             preconditioner: s.linear.preconditioner,
             pc_lag: s.linear.lag,
             condense: s.linear.condense,
+            rigid_body_modes: s.linear.rigid_body_modes,
             bfgs_reform: s.bfgs_reform,
             fd_delta: s.fd_delta,
             fd_rule: s.fd_step,

@@ -564,6 +564,11 @@ pub struct LinearDeck {
     /// `linalg::condense`); false factors the saddle-point block as assembled.
     #[serde(default = "yes")]
     pub condense: bool,
+    /// AMG only: give BoomerAMG the rigid-body rotations (GM-2 interpolation, nodal
+    /// coarsening). Off by default: slower on every scene measured (README, "Linear
+    /// solves").
+    #[serde(default)]
+    pub rigid_body_modes: bool,
 }
 
 fn d_lrtol() -> f64 {
@@ -585,6 +590,7 @@ impl Default for LinearDeck {
             preconditioner: PcKind::BlockJacobi,
             lag: 0,
             condense: true,
+            rigid_body_modes: false,
         }
     }
 }

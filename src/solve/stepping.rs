@@ -96,6 +96,9 @@ pub fn run_static(
     let mut r = vec![0.0; n];
     let mut k = model.new_matrix(comm);
     let mut pc = Preconditioning::new(opts.preconditioner, opts.pc_lag, opts.condense);
+    if opts.rigid_body_modes {
+        pc = pc.with_points(model.node_points());
+    }
     let mut tot = RunTotals::default();
     let mut t0 = Instant::now();
     while let Some((_, t)) = ctl.next() {

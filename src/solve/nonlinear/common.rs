@@ -385,6 +385,7 @@ mod tests {
             preconditioner: crate::linalg::PcKind::BlockJacobi,
             pc_lag: 0,
             condense: true,
+            rigid_body_modes: false,
             bfgs_reform: 11,
             fd_delta: 1e-4,
             fd_rule: FdRule::Element,

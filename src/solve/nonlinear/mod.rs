@@ -76,6 +76,9 @@ pub struct NonlinearOptions {
     pub pc_lag: usize,
     /// Condense contact multipliers node by node in the factored preconditioners.
     pub condense: bool,
+    /// AMG: the rigid-body rotations as near-null space (`[solver.linear]
+    /// rigid_body_modes`).
+    pub rigid_body_modes: bool,
     /// BFGS: reform (reassemble and refactor) the stiffness every n iterations.
     pub bfgs_reform: usize,
     /// JFNK: relative perturbation δ and the rule for ε.

@@ -5,12 +5,15 @@
 //! preconditioner itself ([`crate::linalg::Preconditioner`], created by name) only sets
 //! up and applies.
 
-use crate::linalg::{preconditioner, DistMatrix, FactorOptions, PcKind, Preconditioner};
+use crate::linalg::{
+    preconditioner, DistMatrix, FactorOptions, NodePoints, PcKind, Preconditioner,
+};
 use crate::parallel::Comm;
 
 pub struct Preconditioning {
     kind: PcKind,
     opts: FactorOptions,
+    points: Option<NodePoints>,
     pc: Box<dyn Preconditioner>,
     /// A successful setup is in place.
     ready: bool,
@@ -32,12 +35,20 @@ impl Preconditioning {
         Self {
             kind,
             opts,
-            pc: preconditioner(kind, opts),
+            points: None,
+            pc: preconditioner(kind, opts, None),
             ready: false,
             lag,
             uses: 0,
             factorizations: 0,
         }
+    }
+
+    /// Give the owned nodes' reference coordinates (AMG's rigid-body modes).
+    pub fn with_points(mut self, points: NodePoints) -> Self {
+        self.points = Some(points);
+        self.pc = preconditioner(self.kind, self.opts, self.points.clone());
+        self
     }
 
     pub fn kind(&self) -> PcKind {
@@ -63,15 +74,16 @@ impl Preconditioning {
         }
         let res = self.pc.setup(comm, k);
         if !comm.all_ok(res.is_ok()) {
-            self.pc = preconditioner(self.kind, self.opts);
+            self.pc = preconditioner(self.kind, self.opts, self.points.clone());
             self.ready = false;
             let what = match self.kind {
-                PcKind::Asm => "ASM",
-                _ => "block-Jacobi",
+                PcKind::Asm => "ASM factorization",
+                PcKind::Amg => "AMG setup",
+                _ => "block-Jacobi factorization",
             };
             return Err(match res {
-                Err(e) => format!("{what} factorization failed: {e}"),
-                Ok(()) => format!("{what} factorization failed on another rank"),
+                Err(e) => format!("{what} failed: {e}"),
+                Ok(()) => format!("{what} failed on another rank"),
             });
         }
         self.ready = true;

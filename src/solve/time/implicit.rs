@@ -148,6 +148,9 @@ pub fn run_implicit(
     let n = model.n_owned_dofs();
     let mut k = model.new_matrix(comm);
     let mut pc = Preconditioning::new(opts.preconditioner, opts.pc_lag, opts.condense);
+    if opts.rigid_body_modes {
+        pc = pc.with_points(model.node_points());
+    }
     let mut tot = RunTotals::default();
     let t_start = Instant::now();
 
