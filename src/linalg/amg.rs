@@ -90,8 +90,16 @@ impl BoomerAmg {
         let n_own = k.layout().owned_len();
         let pat = diagonal_pattern(k);
         let mut cond = Condensation::find(&pat);
-        if let Some(c) = cond.as_mut() {
-            c.reduce(&k.vals, AMG_REGULARIZATION)?;
+        let reduced = match cond.as_mut() {
+            Some(c) => c.reduce(&k.vals, AMG_REGULARIZATION),
+            None => Ok(()),
+        };
+        // Every local failure is agreed on before the next collective (no rank may be
+        // left waiting in hypre's or alfe's collectives for one that returned).
+        if !comm.all_ok(reduced.is_ok()) {
+            return Err(reduced
+                .err()
+                .unwrap_or_else(|| "the condensation failed on another rank".into()));
         }
         // Kept blocks (reduced numbering) and hypre's block number of every owned block.
         let kept: Vec<usize> = match &cond {
@@ -109,66 +117,76 @@ impl BoomerAmg {
 
         // The kept rows in scalar CSR with hypre's global columns.
         let n = 3 * kept.len();
-        let mut ptr = Vec::with_capacity(n + 1);
-        let mut cols: Vec<HYPRE_BigInt> = Vec::new();
-        let mut vals = Vec::new();
-        let mut diag: Vec<HYPRE_Int> = Vec::with_capacity(n);
-        ptr.push(0);
-        let red = cond.as_ref().map(|c| (c.reduced(), c.values()));
-        for (r, &i) in kept.iter().enumerate() {
-            for a in 0..3 {
-                let row = 3 * (first + r) + a;
-                let mut d = 0.0;
-                // Owned columns: the (condensed) diagonal block.
-                let mut push_owned = |col_red: usize, blk: &[f64]| -> Result<(), String> {
-                    for b in 0..3 {
-                        let c = 3 * (first + col_red) + b;
-                        if c == row {
-                            d = blk[3 * a + b];
+        let csr = (|| -> Result<_, String> {
+            let mut ptr = Vec::with_capacity(n + 1);
+            let mut cols: Vec<HYPRE_BigInt> = Vec::new();
+            let mut vals = Vec::new();
+            let mut diag: Vec<HYPRE_Int> = Vec::with_capacity(n);
+            ptr.push(0);
+            let red = cond.as_ref().map(|c| (c.reduced(), c.values()));
+            for (r, &i) in kept.iter().enumerate() {
+                for a in 0..3 {
+                    let row = 3 * (first + r) + a;
+                    let mut d = 0.0;
+                    // Owned columns: the (condensed) diagonal block.
+                    let mut push_owned = |col_red: usize, blk: &[f64]| -> Result<(), String> {
+                        for b in 0..3 {
+                            let c = 3 * (first + col_red) + b;
+                            if c == row {
+                                d = blk[3 * a + b];
+                            }
+                            cols.push(big(c)?);
+                            vals.push(blk[3 * a + b]);
                         }
-                        cols.push(big(c)?);
-                        vals.push(blk[3 * a + b]);
-                    }
-                    Ok(())
-                };
-                match red {
-                    Some((rp, rv)) => {
-                        for q in rp.row_ptr[r]..rp.row_ptr[r + 1] {
-                            let e = rp.entries[q];
-                            push_owned(rp.cols[q], &rv[9 * e..9 * e + 9])?;
+                        Ok(())
+                    };
+                    match red {
+                        Some((rp, rv)) => {
+                            for q in rp.row_ptr[r]..rp.row_ptr[r + 1] {
+                                let e = rp.entries[q];
+                                push_owned(rp.cols[q], &rv[9 * e..9 * e + 9])?;
+                            }
+                        }
+                        None => {
+                            for e in k.diag_begin[i]..k.diag_end[i] {
+                                push_owned(k.lcol[e] as usize, &k.vals[9 * e..9 * e + 9])?;
+                            }
                         }
                     }
-                    None => {
-                        for e in k.diag_begin[i]..k.diag_end[i] {
-                            push_owned(k.lcol[e] as usize, &k.vals[9 * e..9 * e + 9])?;
+                    diag.push((cols.len() - ptr[ptr.len() - 1]) as HYPRE_Int);
+                    // Columns owned elsewhere.
+                    let outer =
+                        (k.row_ptr[i]..k.diag_begin[i]).chain(k.diag_end[i]..k.row_ptr[i + 1]);
+                    for e in outer {
+                        let g = ghost_gid[3 * k.lcol[e] as usize];
+                        if g < 0.0 {
+                            continue;
+                        }
+                        for b in 0..3 {
+                            cols.push(big(3 * g as usize + b)?);
+                            vals.push(k.vals[9 * e + 3 * a + b]);
                         }
                     }
-                }
-                diag.push((cols.len() - ptr[ptr.len() - 1]) as HYPRE_Int);
-                // Columns owned elsewhere.
-                let outer = (k.row_ptr[i]..k.diag_begin[i]).chain(k.diag_end[i]..k.row_ptr[i + 1]);
-                for e in outer {
-                    let g = ghost_gid[3 * k.lcol[e] as usize];
-                    if g < 0.0 {
-                        continue;
+                    ptr.push(cols.len());
+                    if d.is_nan() || d <= 0.0 {
+                        let global = k.layout().start() + i;
+                        return Err(format!(
+                            "AMG needs a positive diagonal, but unknown {a} of block {global} \
+                         has {d:e} after the contact multipliers are condensed (a sliding \
+                         frictional node, or multipliers that cannot be condensed); \
+                         block-jacobi and asm take any matrix"
+                        ));
                     }
-                    for b in 0..3 {
-                        cols.push(big(3 * g as usize + b)?);
-                        vals.push(k.vals[9 * e + 3 * a + b]);
-                    }
-                }
-                ptr.push(cols.len());
-                if d.is_nan() || d <= 0.0 {
-                    let global = k.layout().start() + i;
-                    return Err(format!(
-                        "AMG needs a positive diagonal, but unknown {a} of block {global} \
-                         has {d:e} after the contact multipliers are condensed (the \
-                         multipliers of a coupling or rigid body are not): use \
-                         preconditioner = \"block-jacobi\" or \"asm\""
-                    ));
                 }
             }
+            Ok((ptr, cols, vals, diag))
+        })();
+        if !comm.all_ok(csr.is_ok()) {
+            return Err(csr
+                .err()
+                .unwrap_or_else(|| "AMG refused the matrix on another rank".into()));
         }
+        let (ptr, cols, vals, diag) = csr?;
         let a = IjMatrix::new(raw, 3 * first, &ptr, &cols, &vals, &diag)?;
         let b = IjVector::new(raw, 3 * first, 3 * first + n, None)?;
         let x = IjVector::new(raw, 3 * first, 3 * first + n, None)?;
