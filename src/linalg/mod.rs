@@ -85,7 +85,7 @@ pub enum PcKind {
     /// [`RestrictedSchwarz`]).
     Asm,
     /// Algebraic multigrid ([`BoomerAmg`], hypre): one V-cycle on the condensed
-    /// displacement matrix with the rigid-body rotations as near-null space.
+    /// displacement matrix (systems AMG; the rigid-body rotations on request).
     Amg,
     /// None: z = r.
     None,
