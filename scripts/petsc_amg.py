@@ -19,9 +19,10 @@ setup, from a fresh PC each rep), solve_s (KSPSolve). Prints one JSON object (ra
 import argparse
 import json
 import resource
-import struct
 import sys
 import time
+
+from petsc_system import load_system
 
 
 def main():
@@ -44,33 +45,12 @@ def main():
     comm = PETSc.COMM_WORLD
     mpi = comm.tompi4py()
     rank, size = comm.getRank(), comm.getSize()
-    with open(args.A, "rb") as f:
-        cookie, m, ncols, nnz = struct.unpack(">4i", f.read(16))
-    if cookie != 1211216 or m != ncols:
-        raise SystemExit(f"{args.A}: not a square PETSc binary matrix")
-    nloc = PETSc.DECIDE
-    if args.local_rows:
-        rows = [int(float(v)) for v in args.local_rows.split(",")]
-        if len(rows) != size or sum(rows) != m:
-            raise SystemExit(f"--local-rows: need {size} counts summing to {m}")
-        nloc = rows[rank]
 
     def barrier_time():
         mpi.Barrier()
         return time.perf_counter()
 
-    viewer = PETSc.Viewer().createBinary(args.A, "r", comm=comm)
-    A = PETSc.Mat().create(comm=comm)
-    A.setType(PETSc.Mat.Type.AIJ)
-    A.setSizes(((nloc, m), (nloc, m)))
-    A.load(viewer)
-    viewer.destroy()
-    viewer = PETSc.Viewer().createBinary(args.b, "r", comm=comm)
-    b = PETSc.Vec().create(comm=comm)
-    b.setSizes((nloc, m))
-    b.setType(PETSc.Vec.Type.STANDARD)
-    b.load(viewer)
-    viewer.destroy()
+    A, b, m, _ = load_system(PETSc, comm, args.A, args.b, args.local_rows)
 
     opts = PETSc.Options()
     for k, v in {

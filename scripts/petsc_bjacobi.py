@@ -25,10 +25,11 @@ import json
 import os
 import re
 import resource
-import struct
 import sys
 import tempfile
 import time
+
+from petsc_system import load_system
 
 
 def main():
@@ -65,34 +66,12 @@ def main():
     mpi = comm.tompi4py()
     rank, size = comm.getRank(), comm.getSize()
 
-    with open(args.A, "rb") as f:
-        cookie, m, ncols, nnz = struct.unpack(">4i", f.read(16))
-    if cookie != 1211216 or m != ncols:
-        raise SystemExit(f"{args.A}: not a square PETSc binary matrix")
-    nloc = PETSc.DECIDE
-    if args.local_rows:
-        rows = [int(float(v)) for v in args.local_rows.split(",")]
-        if len(rows) != size or sum(rows) != m:
-            raise SystemExit(f"--local-rows: {len(rows)} counts summing to {sum(rows)}; need {size} summing to {m}")
-        nloc = rows[rank]
-
     def barrier_time():
         mpi.Barrier()
         return time.perf_counter()
 
     t0 = barrier_time()
-    viewer = PETSc.Viewer().createBinary(args.A, "r", comm=comm)
-    A = PETSc.Mat().create(comm=comm)
-    A.setType(PETSc.Mat.Type.AIJ)
-    A.setSizes(((nloc, m), (nloc, m)))
-    A.load(viewer)
-    viewer.destroy()
-    viewer = PETSc.Viewer().createBinary(args.b, "r", comm=comm)
-    b = PETSc.Vec().create(comm=comm)
-    b.setSizes((nloc, m))
-    b.setType(PETSc.Vec.Type.STANDARD)
-    b.load(viewer)
-    viewer.destroy()
+    A, b, m, nnz = load_system(PETSc, comm, args.A, args.b, args.local_rows)
     load_s = barrier_time() - t0
     if args.factor == "cholesky":
         A.setOption(PETSc.Mat.Option.SYMMETRIC, True)

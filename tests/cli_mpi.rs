@@ -52,6 +52,33 @@ fn ok(o: Output) -> String {
     so
 }
 
+/// A JSON file (summary, bench output, baseline) as a value.
+fn read_json(path: &Path) -> serde_json::Value {
+    let text = std::fs::read_to_string(path)
+        .unwrap_or_else(|e| panic!("cannot read {}: {e}", path.display()));
+    serde_json::from_str(&text).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+}
+
+/// A recorded baseline (`tests/baseline/FILE`).
+fn baseline(file: &str) -> serde_json::Value {
+    read_json(
+        &Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("tests/baseline")
+            .join(file),
+    )
+}
+
+/// The last value of a baseline's history column.
+fn last_of(base: &serde_json::Value, column: &str) -> f64 {
+    base["history"][column]
+        .as_array()
+        .unwrap()
+        .last()
+        .unwrap()
+        .as_f64()
+        .unwrap()
+}
+
 /// Python with Debian's h5py (SETUP pitfall 7: /usr/bin/python3, not the pyenv one).
 fn python(script: &str, args: &[&str]) -> String {
     let o = Command::new("/usr/bin/python3")
@@ -205,9 +232,7 @@ fn cantilever_same_on_one_and_two_ranks_with_clamp_and_load_on_different_ranks()
         "one progress line per step, on rank 0 only:\n{two}"
     );
     assert_same_runs(&dir.join("r1"), &dir.join("r2"), "cantilever");
-    let s: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(dir.join("r2/summary.json")).unwrap())
-            .unwrap();
+    let s: serde_json::Value = read_json(&dir.join("r2/summary.json"));
     assert_eq!(s["ranks"], 2);
     assert_eq!(s["converged"], true);
     assert_eq!(s["steps"], 10);
@@ -235,9 +260,7 @@ fn cantilever_same_on_one_and_two_ranks_with_clamp_and_load_on_different_ranks()
             "--quiet",
         ],
     ));
-    let s3: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(dir.join("r3/summary.json")).unwrap())
-            .unwrap();
+    let s3: serde_json::Value = read_json(&dir.join("r3/summary.json"));
     assert_eq!(s3["partition"], "cache");
 }
 
@@ -345,8 +368,7 @@ fn gmres_block_jacobi_two_ranks_59k_unknowns() {
             "b.json",
         ],
     ));
-    let b: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(dir.join("b.json")).unwrap()).unwrap();
+    let b: serde_json::Value = read_json(&dir.join("b.json"));
     assert_eq!(b["ranks"], 2);
     assert!(b["unknowns"].as_u64().unwrap() >= 50_000, "{b}");
     assert_eq!(b["gmres_converged"], true);
@@ -968,8 +990,7 @@ fn amg_iterations_flat_from_one_to_two_ranks() {
                 &json,
             ],
         ));
-        let b: serde_json::Value =
-            serde_json::from_str(&std::fs::read_to_string(dir.join(&json)).unwrap()).unwrap();
+        let b: serde_json::Value = read_json(&dir.join(&json));
         assert_eq!(b["preconditioner"], "amg");
         assert_eq!(b["gmres_converged"], true);
         let true_rel = b["true_relative_residual"].as_f64().unwrap();
@@ -996,23 +1017,10 @@ fn hertz_sphere_with_amg_on_two_ranks_matches_block_jacobi() {
         2,
         &["run", "hertz.toml", "--quiet", "--out", "out"],
     ));
-    let s: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(dir.join("out/summary.json")).unwrap())
-            .unwrap();
-    let base: serde_json::Value = serde_json::from_str(
-        &std::fs::read_to_string(
-            Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/baseline/hertz-sphere.1.json"),
-        )
-        .unwrap(),
-    )
-    .unwrap();
+    let s: serde_json::Value = read_json(&dir.join("out/summary.json"));
+    let base = baseline("hertz-sphere.1.json");
     let fz = s["walls"]["sphere"]["force"][2].as_f64().unwrap();
-    let fz_bj = base["history"]["sphere.fz"]
-        .as_array()
-        .unwrap()
-        .last()
-        .unwrap();
-    let fz_bj = fz_bj.as_f64().unwrap();
+    let fz_bj = last_of(&base, "sphere.fz");
     assert!(
         rel_err(fz, fz_bj) < 1e-7,
         "AMG {fz} vs block Jacobi {fz_bj}"
@@ -1041,23 +1049,10 @@ fn clip_tensile_with_amg_survives_refused_setups_on_one_rank() {
         2,
         &["run", "clip.toml", "--quiet", "--out", "out"],
     ));
-    let s: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(dir.join("out/summary.json")).unwrap())
-            .unwrap();
-    let base: serde_json::Value = serde_json::from_str(
-        &std::fs::read_to_string(
-            Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/baseline/clip-tensile.2.json"),
-        )
-        .unwrap(),
-    )
-    .unwrap();
+    let s: serde_json::Value = read_json(&dir.join("out/summary.json"));
+    let base = baseline("clip-tensile.2.json");
     let fy = s["walls"]["upper_pin"]["force"][1].as_f64().unwrap();
-    let fy_bj = base["history"]["upper_pin.fy"]
-        .as_array()
-        .unwrap()
-        .last()
-        .unwrap();
-    let fy_bj = fy_bj.as_f64().unwrap();
+    let fy_bj = last_of(&base, "upper_pin.fy");
     assert!(
         rel_err(fy, fy_bj) < 1e-3,
         "AMG {fy} vs block Jacobi {fy_bj}"

@@ -57,7 +57,6 @@ struct State {
     x: IjVector,
     cond: Option<Condensation>,
     n_full: usize,
-    n_kept: usize,
     work: RefCell<(Vec<f64>, Vec<f64>)>,
 }
 
@@ -71,19 +70,6 @@ impl BoomerAmg {
             points,
             state: None,
         }
-    }
-
-    /// Levels of the last hierarchy (0 before a setup).
-    pub fn levels(&self) -> usize {
-        self.state.as_ref().map_or(0, |s| s.amg.levels())
-    }
-
-    /// Multiplier blocks eliminated before the last setup.
-    pub fn condensed_blocks(&self) -> usize {
-        self.state
-            .as_ref()
-            .and_then(|s| s.cond.as_ref())
-            .map_or(0, Condensation::n_condensed)
     }
 
     fn build(&self, comm: &dyn Comm, k: &DistMatrix) -> Result<State, String> {
@@ -216,7 +202,6 @@ impl BoomerAmg {
             x,
             cond,
             n_full: 3 * n_own,
-            n_kept: n,
             work: RefCell::new((Vec::with_capacity(n), vec![0.0; n])),
         })
     }
@@ -252,7 +237,6 @@ impl Preconditioner for BoomerAmg {
         s.amg.solve(&s.a, &s.b, &s.x);
         let ok = s.x.get(sol).is_ok();
         debug_assert!(ok);
-        debug_assert_eq!(sol.len(), s.n_kept);
         match &s.cond {
             Some(c) => {
                 z.copy_from_slice(r);

@@ -106,7 +106,6 @@ extern "C" {
         n: HYPRE_Int,
         vectors: *mut Handle,
     ) -> HYPRE_Int;
-    fn HYPRE_BoomerAMGGetNumLevels(solver: Handle, v: *mut HYPRE_Int) -> HYPRE_Int;
 }
 
 #[link(name = "gomp")]
@@ -419,13 +418,6 @@ impl Amg {
             HYPRE_BoomerAMGSolve(self.h, a.par, b.par, x.par);
             HYPRE_ClearAllErrors();
         }
-    }
-
-    /// Levels of the hierarchy.
-    pub(crate) fn levels(&self) -> usize {
-        let mut n = 0;
-        unsafe { HYPRE_BoomerAMGGetNumLevels(self.h, &mut n) };
-        n.max(0) as usize
     }
 }
 

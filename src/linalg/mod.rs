@@ -92,6 +92,13 @@ pub enum PcKind {
 }
 
 impl PcKind {
+    /// The kind named `s` (its [`PcKind::name`], as in the deck), if any.
+    pub fn parse(s: &str) -> Option<Self> {
+        [Self::BlockJacobi, Self::Asm, Self::Amg, Self::None]
+            .into_iter()
+            .find(|k| k.name() == s)
+    }
+
     pub fn name(self) -> &'static str {
         match self {
             PcKind::BlockJacobi => "block-jacobi",
