@@ -5,7 +5,7 @@ use crate::model::def::ModelDef;
 use crate::model::distribute;
 use crate::model::Model;
 use crate::output::results::ResultsWriter;
-use crate::parallel::Comm;
+use crate::parallel::{Comm, Traffic};
 use crate::partition::{cache, quality};
 use crate::scene::{RunSettings, Scene};
 use crate::solve::nonlinear::SolverKind;
@@ -49,6 +49,8 @@ pub struct Summary {
     pub unknowns: usize,
     /// The nonlinear solver used (`central-difference` for explicit runs).
     pub solver: String,
+    /// The preconditioner of the linear solves ("auto" resolved; explicit runs have none).
+    pub preconditioner: String,
     /// `static`, `implicit` or `explicit`.
     pub analysis: String,
     /// The (first) time step: the deck's step, or the explicit step used.
@@ -71,6 +73,9 @@ pub struct Summary {
     pub wall_time_s: f64,
     /// Wall time by phase (max over ranks): setup, partition, assembly, linear_solve, output.
     pub phases: Phases,
+    /// Messages alfe sent (hypre's own are not counted): the largest count of each kind
+    /// over the ranks, and the sum over ranks.
+    pub traffic: TrafficSummary,
     /// Largest peak resident set over the ranks, and every rank's.
     pub peak_rss_mb: f64,
     pub peak_rss_mb_per_rank: Vec<f64>,
@@ -87,6 +92,34 @@ pub struct Phases {
     pub assembly: f64,
     pub linear_solve: f64,
     pub output: f64,
+}
+
+#[derive(Debug, Clone, Default, serde::Serialize)]
+pub struct TrafficSummary {
+    pub max_per_rank: Traffic,
+    pub total: Traffic,
+}
+
+impl TrafficSummary {
+    /// Gather every rank's traffic (taken before the gathering reductions).
+    fn gather(comm: &dyn Comm) -> Self {
+        let t = comm.traffic();
+        let mine = [t.reductions, t.exchanges, t.messages, t.bytes];
+        let mut max = mine;
+        let mut sum = mine;
+        comm.allreduce_max_u64(&mut max);
+        comm.allreduce_sum_u64(&mut sum);
+        let of = |v: [u64; 4]| Traffic {
+            reductions: v[0],
+            exchanges: v[1],
+            messages: v[2],
+            bytes: v[3],
+        };
+        Self {
+            max_per_rank: of(max),
+            total: of(sum),
+        }
+    }
 }
 
 /// Peak resident set size of this process in MB (Linux VmHWM).
@@ -247,9 +280,13 @@ pub fn run(comm: &dyn Comm, opts: &RunOptions) -> Result<RunOutcome> {
     let mut phases = Phases::default();
     let Setup {
         mut model,
-        run: settings,
+        run: mut settings,
         partition: origin,
     } = setup(comm, opts, &mut phases)?;
+    settings.solver.preconditioner = settings
+        .solver
+        .preconditioner
+        .resolve(comm.size(), model.dofs.dofs.global_len());
     let scene = settings.name.clone();
     let out = opts
         .out
@@ -284,8 +321,12 @@ pub fn run(comm: &dyn Comm, opts: &RunOptions) -> Result<RunOutcome> {
     };
     if !quiet {
         println!(
-            "alfe: scene {scene} on {} rank(s) with {method}: {} nodes, {} elements, {} unknowns, {} nominal steps",
+            "alfe: scene {scene} on {} rank(s) with {method}{}: {} nodes, {} elements, {} unknowns, {} nominal steps",
             comm.size(),
+            match kind {
+                AnalysisKind::Explicit => String::new(),
+                _ => format!(" ({})", nopts.preconditioner.name()),
+            },
             model.mesh.n_nodes_global,
             model.mesh.n_elems_global,
             model.dofs.dofs.global_len(),
@@ -391,6 +432,7 @@ pub fn run(comm: &dyn Comm, opts: &RunOptions) -> Result<RunOutcome> {
         phases.linear_solve,
         phases.output,
     ];
+    let traffic = TrafficSummary::gather(comm);
     comm.allreduce_max(&mut ph);
     let rss = comm.allgather_f64(peak_rss_mb());
     let message = totals.failure.clone().unwrap_or_else(|| "converged".into());
@@ -403,6 +445,10 @@ pub fn run(comm: &dyn Comm, opts: &RunOptions) -> Result<RunOutcome> {
         elements: model.mesh.n_elems_global,
         unknowns: model.dofs.dofs.global_len(),
         solver: method,
+        preconditioner: match kind {
+            AnalysisKind::Explicit => "none".into(),
+            _ => nopts.preconditioner.name().into(),
+        },
         analysis: kind.name().into(),
         time_step: explicit_dt
             .as_ref()
@@ -425,6 +471,7 @@ pub fn run(comm: &dyn Comm, opts: &RunOptions) -> Result<RunOutcome> {
             linear_solve: ph[3],
             output: ph[4],
         },
+        traffic,
         peak_rss_mb: rss.iter().cloned().fold(0.0, f64::max),
         peak_rss_mb_per_rank: rss,
         partition: origin,

@@ -71,6 +71,28 @@ impl Graph {
     pub fn n(&self) -> usize {
         self.xadj.len() - 1
     }
+
+    /// The graph of distance ≤ 2 (the pattern of A² for A with this pattern and a full
+    /// diagonal): the graph whose elimination fills like AᵀA's.
+    pub fn squared(&self) -> Self {
+        let n = self.n();
+        let mut ptr = vec![0usize; n + 1];
+        let mut cols = Vec::new();
+        let mut mark = vec![usize::MAX; n];
+        for v in 0..n {
+            mark[v] = v;
+            for &w in &self.adj[self.xadj[v]..self.xadj[v + 1]] {
+                for &u in std::iter::once(&w).chain(&self.adj[self.xadj[w]..self.xadj[w + 1]]) {
+                    if mark[u] != v {
+                        mark[u] = v;
+                        cols.push(u);
+                    }
+                }
+            }
+            ptr[v + 1] = cols.len();
+        }
+        Self::symmetrized(n, &ptr, &cols)
+    }
 }
 
 /// METIS nested dissection of `g`: returns `perm` with `perm[new] = old` (the vertex
@@ -160,6 +182,18 @@ pub fn expand_to_dofs(perm: &[usize], dofs: usize) -> Vec<usize> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The squared graph joins vertices two edges apart: a path 0-1-2-3 gains 0-2, 1-3.
+    #[test]
+    fn squared_graph_joins_vertices_at_distance_two() {
+        let path = Graph::symmetrized(4, &[0, 1, 2, 3, 3], &[1, 2, 3]);
+        let sq = path.squared();
+        let nbrs = |v: usize| sq.adj[sq.xadj[v]..sq.xadj[v + 1]].to_vec();
+        assert_eq!(nbrs(0), vec![1, 2]);
+        assert_eq!(nbrs(1), vec![0, 2, 3]);
+        assert_eq!(nbrs(2), vec![0, 1, 3]);
+        assert_eq!(nbrs(3), vec![1, 2]);
+    }
 
     /// 5-point Laplacian graph of an `nx × ny` grid.
     fn grid(nx: usize, ny: usize) -> Graph {

@@ -1,5 +1,21 @@
 //! The communicator seam: the few collectives alfe uses, typed on what it sends.
 
+/// What one rank has sent through a communicator since it was made: counts that do not
+/// depend on the machine, from which a network model predicts communication time
+/// (issue 12's scaling study). Traffic of libraries that talk MPI themselves (hypre) is
+/// not seen here; `scripts/scaling-study` reads it from Open MPI's monitoring.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize)]
+pub struct Traffic {
+    /// Latency-bound collectives: all-reduces, broadcasts, barriers.
+    pub reductions: u64,
+    /// Personalised exchanges (halo updates, redistribution): `alltoall(v)` calls.
+    pub exchanges: u64,
+    /// Non-empty messages to other ranks within the exchanges.
+    pub messages: u64,
+    /// Bytes to other ranks within the exchanges.
+    pub bytes: u64,
+}
+
 /// Collective operations over a fixed group of ranks.
 ///
 /// Every method is collective: all ranks call it, in the same order. Counts passed to
@@ -33,6 +49,10 @@ pub trait Comm {
     fn broadcast_bytes(&self, root: usize, bytes: &mut Vec<u8>);
     /// The raw MPI communicator, for MPI-IO; `None` for a serial run.
     fn raw_mpi(&self) -> Option<mpi::ffi::MPI_Comm>;
+    /// This rank's traffic so far; zero where nothing is sent (one rank, threads).
+    fn traffic(&self) -> Traffic {
+        Traffic::default()
+    }
 
     /// True on every rank iff `ok` is true on every rank (one reduction).
     /// This is how a local failure (a bad element, a failed factorization) is agreed on

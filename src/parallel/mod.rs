@@ -9,7 +9,7 @@ pub mod layout;
 pub mod mpi_comm;
 pub mod thread_comm;
 
-pub use comm::{Comm, SerialComm};
+pub use comm::{Comm, SerialComm, Traffic};
 pub use halo::HaloPlan;
 pub use layout::Layout;
 pub use mpi_comm::MpiComm;

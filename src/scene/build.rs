@@ -600,6 +600,37 @@ pub fn build(deck: &Deck, deck_dir: &Path) -> Result<Scene> {
 }
 
 /// `[analysis]`, `[solver]` and `[output]` with their defaults filled in (validated).
+/// Largest Poisson's ratio for which `preconditioner = "auto"` may take AMG. AMG's
+/// iterations grow without bound as ν → ½ (cook-membrane, ν = 0.4999: ~700 GMRES
+/// iterations per Newton iteration, README "Linear solves"); scenes measured fine up to
+/// 0.3. The value between is a judgement, not a measurement.
+pub const AUTO_AMG_MAX_NU: f64 = 0.45;
+
+/// Why AMG does not suit this deck's problem class, if it does not. These are the
+/// classes where it was measured slower than block Jacobi or failing (README "Linear
+/// solves"): nearly incompressible solids, friction (sticking rows make some condensed
+/// diagonals non-positive: clip-tensile 6.0 s against 3.3 s; sliding-block no gain),
+/// coupling multipliers (refused), and plasticity (its isochoric flow makes the tangent
+/// nearly incompressible where it yields; not measured, kept on the robust side).
+pub fn amg_unsuited(deck: &Deck) -> Option<String> {
+    if !deck.couplings.is_empty() {
+        return Some("[[couplings]] add constraint multipliers".into());
+    }
+    if let Some(m) = deck.materials.iter().find(|m| m.nu > AUTO_AMG_MAX_NU) {
+        return Some(format!(
+            "material '{}' is nearly incompressible (nu = {} > {AUTO_AMG_MAX_NU})",
+            m.name, m.nu
+        ));
+    }
+    if let Some(m) = deck.materials.iter().find(|m| m.model == MaterialModel::J2) {
+        return Some(format!("material '{}' is plastic (j2)", m.name));
+    }
+    if let Some(w) = deck.walls.iter().find(|w| w.friction > 0.0) {
+        return Some(format!("wall '{}' has friction", w.name));
+    }
+    None
+}
+
 fn run_settings(deck: &Deck) -> RunSettings {
     let a = &deck.analysis;
     let s = &deck.solver;
@@ -631,7 +662,10 @@ fn run_settings(deck: &Deck) -> RunSettings {
                 restart: s.linear.restart,
                 max_iterations: s.linear.max_iterations,
             },
-            preconditioner: s.linear.preconditioner,
+            preconditioner: match s.linear.preconditioner {
+                PcKind::Auto if amg_unsuited(deck).is_some() => PcKind::BlockJacobi,
+                k => k,
+            },
             pc_lag: s.linear.lag,
             condense: s.linear.condense,
             rigid_body_modes: s.linear.rigid_body_modes,

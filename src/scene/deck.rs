@@ -553,6 +553,9 @@ pub struct LinearDeck {
     pub restart: usize,
     #[serde(default = "d_lmax")]
     pub max_iterations: usize,
+    /// "auto" (default), "block-jacobi", "asm", "amg" or "none". "auto" is block Jacobi
+    /// for problem classes AMG does not suit (`scene::build::amg_unsuited`), and otherwise
+    /// AMG from a size on (`linalg::PcKind::resolve`).
     #[serde(default)]
     pub preconditioner: PcKind,
     /// Reuse a block-Jacobi factorization for this many further Jacobians (Newton
@@ -587,7 +590,7 @@ impl Default for LinearDeck {
             rtol: d_lrtol(),
             restart: d_restart(),
             max_iterations: d_lmax(),
-            preconditioner: PcKind::BlockJacobi,
+            preconditioner: PcKind::Auto,
             lag: 0,
             condense: true,
             rigid_body_modes: false,

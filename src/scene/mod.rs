@@ -179,6 +179,50 @@ pub fn read(src: &Source) -> Result<Scene> {
 
 #[cfg(test)]
 mod tests {
+    /// `preconditioner = "auto"` keeps block Jacobi for the classes AMG was measured
+    /// not to suit, and names why; the others stay `auto` (AMG from a size on).
+    #[test]
+    fn auto_preconditioner_by_problem_class() {
+        use crate::linalg::PcKind;
+        let why = |name: &str| {
+            let (_, _, text) = super::BUILTIN.iter().find(|b| b.0 == name).unwrap();
+            let d = super::deck::parse(text).unwrap();
+            (
+                super::build::amg_unsuited(&d),
+                super::build::build(&d, std::path::Path::new(".")).unwrap(),
+            )
+        };
+        for name in [
+            "hertz-sphere",
+            "cantilever",
+            "cube-stretch",
+            "twisted-block",
+            "patch-hex8",
+        ] {
+            let (reason, scene) = why(name);
+            assert_eq!(reason, None, "{name}");
+            // The built-in deck does not name a preconditioner; its run settings keep auto.
+            assert_eq!(scene.run.solver.preconditioner, PcKind::Auto, "{name}");
+        }
+        for (name, expect) in [
+            ("sliding-block", "wall 'floor' has friction"),
+            ("rubber-indent", "nearly incompressible"),
+            ("cook-membrane", "nearly incompressible"),
+            ("plastic-bar", "plastic (j2)"),
+            ("coupled-cantilever", "[[couplings]]"),
+        ] {
+            let (reason, scene) = why(name);
+            let reason = reason.unwrap_or_default();
+            assert!(reason.contains(expect), "{name}: {reason}");
+            let pc = scene.run.solver.preconditioner;
+            // cook-membrane names ASM itself; "auto" elsewhere became block Jacobi.
+            assert!(
+                matches!(pc, PcKind::BlockJacobi | PcKind::Asm),
+                "{name}: {pc:?}"
+            );
+        }
+    }
+
     #[test]
     fn every_builtin_scene_parses() {
         for (name, _, text) in super::BUILTIN {
