@@ -14,8 +14,8 @@ use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
 use faer::perm::PermRef;
 use faer::sparse::linalg::lu::supernodal::{
     factorize_supernodal_numeric_lu, factorize_supernodal_numeric_lu_scratch,
-    factorize_supernodal_symbolic_lu, factorize_supernodal_symbolic_lu_scratch, SupernodalLu,
-    SymbolicSupernodalLu,
+    factorize_supernodal_symbolic_lu, factorize_supernodal_symbolic_lu_scratch,
+    solve_in_place_scratch, SupernodalLu, SymbolicSupernodalLu,
 };
 use faer::sparse::linalg::qr::{col_etree, column_counts_ata, postorder};
 use faer::sparse::linalg::SymbolicSupernodalParams;
@@ -152,7 +152,7 @@ impl NdLu {
         }
         let rows = PermRef::new_checked(&self.row_fwd, &self.row_inv, self.n);
         let cols = PermRef::new_checked(&self.col_fwd, &self.col_inv, self.n);
-        let mut mem = MemBuffer::new(StackReq::new::<f64>(self.n).array(2));
+        let mut mem = MemBuffer::new(solve_in_place_scratch::<usize, f64>(self.n, 1, Par::Seq));
         self.lu.solve_in_place_with_conj(
             rows,
             cols,
