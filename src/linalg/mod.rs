@@ -102,9 +102,11 @@ pub enum PcKind {
 /// AMG 7.1 s against block Jacobi's 14.0 s; README "Linear solves").
 pub const AUTO_AMG_MIN_UNKNOWNS: usize = 20_000;
 /// ... and on one rank only from this many: one rank's block Jacobi is a full sparse
-/// Cholesky, faster than AMG's iterations until its fill grows (hertz-sphere on 1 rank:
-/// block Jacobi 9.2 s, AMG 11.9 s at 28k; elastic block at 273k: 38.3 s against 8.6 s).
-pub const AUTO_AMG_MIN_UNKNOWNS_ONE_RANK: usize = 100_000;
+/// Cholesky, faster than AMG's iterations until its fill grows. hertz-sphere refined,
+/// first step, 1 rank (`scripts/amg-scaling --ranks 1 --pc block-jacobi,amg --cells N`):
+/// block Jacobi / AMG 8.5 / 9.4 s at 53k unknowns, 25.2 / 19.1 s at 99k; the whole run at
+/// 28k: 9.2 / 11.9 s; the elastic block at 273k: 38.3 / 8.6 s.
+pub const AUTO_AMG_MIN_UNKNOWNS_ONE_RANK: usize = 75_000;
 
 impl PcKind {
     /// What [`PcKind::Auto`] means for `unknowns` global unknowns on `ranks` ranks; any
