@@ -649,6 +649,7 @@ fn run_settings(deck: &Deck) -> RunSettings {
             dt_factor: a
                 .dt_factor
                 .unwrap_or(crate::solve::time::explicit::DEFAULT_DT_FACTOR),
+            predictor: a.predictor.unwrap_or_default(),
         },
         solver: NonlinearOptions {
             kind: s.nonlinear,
@@ -663,7 +664,7 @@ fn run_settings(deck: &Deck) -> RunSettings {
                 max_iterations: s.linear.max_iterations,
             },
             preconditioner: match s.linear.preconditioner {
-                PcKind::Auto if amg_unsuited(deck).is_some() => PcKind::BlockJacobi,
+                PcKind::Auto if amg_unsuited(deck).is_some() => PcKind::AutoFactored,
                 k => k,
             },
             pc_lag: s.linear.lag,

@@ -4,7 +4,7 @@
 
 pub use crate::linalg::PcKind;
 pub use crate::solve::nonlinear::{FdRule, SolverKind};
-pub use crate::solve::{AnalysisKind, MassKind, Scheme};
+pub use crate::solve::{AnalysisKind, MassKind, Predictor, Scheme};
 use serde::{Deserialize, Serialize};
 
 #[derive(Debug, Clone, Deserialize, Serialize)]
@@ -467,6 +467,10 @@ pub struct AnalysisDeck {
     /// Explicit: Δt = dt_factor × the stable step (default 0.9, LS-DYNA's TSSFAC).
     #[serde(default)]
     pub dt_factor: Option<f64>,
+    /// Static: "linear" (default) starts each step from the last increment extrapolated
+    /// (Abaqus's default); "none" from the last converged state.
+    #[serde(default)]
+    pub predictor: Option<Predictor>,
 }
 
 /// Nonlinear solver settings. Convergence (all must hold): ‖r‖ ≤ residual_rtol · f_ref
@@ -554,8 +558,9 @@ pub struct LinearDeck {
     #[serde(default = "d_lmax")]
     pub max_iterations: usize,
     /// "auto" (default), "block-jacobi", "asm", "amg" or "none". "auto" is block Jacobi
-    /// for problem classes AMG does not suit (`scene::build::amg_unsuited`), and otherwise
-    /// AMG from a size on (`linalg::PcKind::resolve`).
+    /// on one rank and ASM on more for problem classes AMG does not suit
+    /// (`scene::build::amg_unsuited`), and otherwise AMG from a size on
+    /// (`linalg::PcKind::resolve`).
     #[serde(default)]
     pub preconditioner: PcKind,
     /// Reuse a block-Jacobi factorization for this many further Jacobians (Newton

@@ -99,6 +99,11 @@ pub const BUILTIN: &[(&str, &str, &str)] = &[
         include_str!("scenes/rubber-indent.toml"),
     ),
     (
+        "cylinder-press",
+        "rigid cylinder pressed 30 % into a Mooney-Rivlin block, mu = 0.1, plane strain (refinement study)",
+        include_str!("scenes/cylinder-press.toml"),
+    ),
+    (
         "taylor-bar",
         "copper bar at 227 m/s onto a rigid wall: implicit dynamics, ALM (paper 3.1)",
         include_str!("scenes/taylor-bar.toml"),
@@ -215,9 +220,10 @@ mod tests {
             let reason = reason.unwrap_or_default();
             assert!(reason.contains(expect), "{name}: {reason}");
             let pc = scene.run.solver.preconditioner;
-            // cook-membrane names ASM itself; "auto" elsewhere became block Jacobi.
+            // cook-membrane names ASM itself; "auto" elsewhere became the factored choice
+            // (block Jacobi on one rank, ASM on more).
             assert!(
-                matches!(pc, PcKind::BlockJacobi | PcKind::Asm),
+                matches!(pc, PcKind::AutoFactored | PcKind::Asm),
                 "{name}: {pc:?}"
             );
         }

@@ -47,6 +47,21 @@ pub enum MassKind {
     Lumped,
 }
 
+/// Where a static step's Newton iterations start (Abaqus/Standard `*STATIC`,
+/// `EXTRAPOLATION=`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum Predictor {
+    /// From the last converged state extrapolated along the last converged increment,
+    /// scaled to the step: u_n + (Δt/Δt_prev)(u_n − u_{n−1}) (Abaqus's default). On a
+    /// monotone load path the first residual is then second-order small in Δt instead
+    /// of first-order; contact nodes arrive near the wall with their multipliers.
+    #[default]
+    Linear,
+    /// From the last converged state.
+    None,
+}
+
 /// The analysis of a run, defaults resolved.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Analysis {
@@ -68,6 +83,8 @@ pub struct Analysis {
     pub mass: MassKind,
     /// Explicit: Δt = dt_factor × the stable step.
     pub dt_factor: f64,
+    /// Static: the first iterate of a step.
+    pub predictor: Predictor,
 }
 
 impl Analysis {

@@ -109,6 +109,7 @@ mod tests {
             rho_inf: 1.0,
             mass: MassKind::Consistent,
             dt_factor: 0.9,
+            predictor: crate::solve::Predictor::Linear,
         }
     }
 

@@ -10,7 +10,7 @@ use crate::solve::control::StepControl;
 use crate::solve::nonlinear::{
     solve, NonlinearOptions, NonlinearProblem, Preconditioning, SolveStats,
 };
-use crate::solve::Analysis;
+use crate::solve::{Analysis, Predictor};
 use crate::Result;
 use std::time::Instant;
 
@@ -101,9 +101,20 @@ pub fn run_static(
     }
     let mut tot = RunTotals::default();
     let mut t0 = Instant::now();
-    while let Some((_, t)) = ctl.next() {
+    // The last converged increment and its step, for the predictor.
+    let mut last: Option<(Vec<f64>, f64)> = None;
+    let mut failed = false;
+    while let Some((t_n, t)) = ctl.next() {
         let g = model.prescribed(t);
         let mut trial = u.clone();
+        // After a failed attempt the cut step starts from the converged state: the
+        // extrapolation may be what failed.
+        if let (Predictor::Linear, Some((du, dt)), false) = (analysis.predictor, &last, failed) {
+            let s = (t - t_n) / dt;
+            for (x, d) in trial.iter_mut().zip(du) {
+                *x += s * d;
+            }
+        }
         let stats = {
             let mut prob = StaticProblem { model, time: t };
             solve(
@@ -119,6 +130,7 @@ pub fn run_static(
                 );
             }
             pc.invalidate();
+            failed = true;
             if let Err(why) = ctl.reject(t, &stats.reason, "step") {
                 tot.failure = Some(why);
                 return Ok(tot);
@@ -127,6 +139,9 @@ pub fn run_static(
             continue;
         }
         model.commit();
+        let du: Vec<f64> = trial.iter().zip(u.iter()).map(|(a, b)| a - b).collect();
+        last = Some((du, t - t_n));
+        failed = false;
         *u = trial;
         let (step, retries) = ctl.accept(t, stats.iterations);
         tot.steps += 1;

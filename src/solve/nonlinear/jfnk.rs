@@ -6,7 +6,8 @@
 //!   δ = 1e-4, i.e. the perturbation moves the nodes by 10⁻⁴ of an element whatever the
 //!   scale of v; Walker–Pernice's √((1 + ‖u‖) ε_mach)/‖v‖ on request.
 //! * Preconditioner: block Jacobi (or ASM) of the stiffness assembled and factored once at the
-//!   start of the step (lagged); reassembled and refactored only if GMRES fails under it.
+//!   start of the step (lagged); reassembled and refactored at the next iterate when GMRES
+//!   struggles under it (more than [`REFRESH_AFTER_GMRES`] iterations), at once when it fails.
 //! * Forcing terms: Eisenstat–Walker choice 2 (η = 0.9 (‖r_k‖/‖r_{k−1}‖)², with their
 //!   safeguard, capped at 0.9), never tighter than needed to meet the residual tolerance.
 //! * Globalisation: optional backtracking (Armijo) line search on ‖r_free‖ (`[solver]
@@ -31,6 +32,12 @@ const ETA_0: f64 = 1e-2;
 const ETA_MAX: f64 = 0.1;
 /// Forcing term of an iteration that imposes a prescribed increment.
 const ETA_IMPOSE: f64 = 1e-4;
+/// GMRES iterations under the lagged preconditioner beyond which it is refreshed at the
+/// next iterate: it struggles there, and its finite-difference products then cost more
+/// than a refactorization. cylinder-press, jfnk (iterations, GMRES iterations, wall):
+/// never 128 / 4661 / 10.2 s; 60 → 119 / 2694 / 6.2 s; 30 → 123 / 1754 / 4.8 s;
+/// 15 → 156 / 1395 / 4.2 s with a retry.
+const REFRESH_AFTER_GMRES: usize = 30;
 
 /// The finite-difference Jacobian of `problem` at `u` (whose residual is `r0`), acting
 /// on the free dofs; constrained rows are the identity.
@@ -186,6 +193,10 @@ pub fn jfnk(
     let (eta_max, gamma, alpha) = (ETA_MAX, 0.9, 2.0);
     let mut eta = ETA_0;
     let mut prev_rn = f64::NAN;
+    // The preconditioning stiffness was (re)assembled at the current iterate.
+    let mut fresh_here = factored;
+    // GMRES struggled under the lagged preconditioner.
+    let mut refresh_next = false;
     for it in 0.. {
         st.residual_history.push(ev.relative());
         match monitor.verdict(&ev, it, scale, opts) {
@@ -198,6 +209,14 @@ pub fn jfnk(
                 return Ok(st);
             }
             Verdict::Continue => {}
+        }
+        if refresh_next {
+            // Refresh it here, and take this direction on the Jacobian just assembled,
+            // as at the start of the step.
+            if !refresh_preconditioner(comm, problem, u, k, pc, &cons, &mut st)? {
+                return Ok(st);
+            }
+            fresh_here = true;
         }
         // Eisenstat–Walker choice 2 with safeguard (Eisenstat & Walker 1996, §2).
         if it > 0 && prev_rn > 0.0 && ev.gap == 0.0 {
@@ -222,12 +241,14 @@ pub fn jfnk(
         // assembled: it is the exact Jacobian there, so it is the operator too. That
         // also keeps the Krylov operator linear at a converged plastic state, where a
         // finite-difference product loads or unloads depending on the direction.
-        let assembled = it == 0 && factored;
-        if !direction(
+        let assembled = fresh_here;
+        let Some(gmres_its) = direction(
             comm, problem, u, r, &cons, &gapv, &ev, eta_k, &mut du, k, pc, opts, assembled, &mut st,
-        )? {
+        )?
+        else {
             return Ok(st);
-        }
+        };
+        fresh_here = false;
         st.iterations += 1;
         match take_step(
             comm,
@@ -244,6 +265,7 @@ pub fn jfnk(
             Some(next) => ev = next,
             None => return Ok(st),
         }
+        refresh_next = factored && !assembled && gmres_its > REFRESH_AFTER_GMRES;
     }
     unreachable!("the loop returns")
 }
@@ -253,7 +275,8 @@ pub fn jfnk(
 /// lagged preconditioner, refreshed once at the current point if GMRES fails under it.
 /// With `assembled`, GMRES works on `k` itself (the Jacobian just assembled at `u` for
 /// the preconditioner) instead of finite-difference products.
-/// `Ok(false)`: the iteration failed (reason in `st`).
+/// `Ok(Some(its))`: GMRES converged in `its` iterations (its last attempt);
+/// `Ok(None)`: the iteration failed (reason in `st`).
 #[allow(clippy::too_many_arguments)]
 fn direction(
     comm: &dyn Comm,
@@ -270,7 +293,7 @@ fn direction(
     opts: &NonlinearOptions,
     assembled: bool,
     st: &mut SolveStats,
-) -> Result<bool> {
+) -> Result<Option<usize>> {
     let n = u.len();
     let t = Instant::now();
     let outside = st.seconds_linear + st.seconds_assembly;
@@ -284,7 +307,7 @@ fn direction(
         opts.char_length,
         ev.un,
     );
-    let res = (|| -> Result<bool> {
+    let res = (|| -> Result<Option<usize>> {
         let mut coupling = vec![0.0; n];
         if ev.gap > 0.0 {
             coupling_product(comm, &mut op, gapv, &mut coupling)?;
@@ -316,12 +339,12 @@ fn direction(
             };
             st.linear_iterations += gs.iterations;
             if gs.converged {
-                return Ok(true);
+                return Ok(Some(gs.iterations));
             }
             if attempt == 0 && pc.is_factored() && !assembled {
                 // GMRES stalled under the lagged factorization: refresh it at this point.
                 if !refresh_preconditioner(comm, op.problem, u, k, pc, cons, st)? {
-                    return Ok(false);
+                    return Ok(None);
                 }
                 continue;
             }
@@ -331,7 +354,7 @@ fn direction(
                 gs.residual_norm / gs.rhs_norm.max(f64::MIN_POSITIVE)
             );
         }
-        Ok(false)
+        Ok(None)
     })();
     // Time in GMRES and FD products; a refresh booked its own assembly and factorization.
     let refresh = st.seconds_linear + st.seconds_assembly - outside;
@@ -341,7 +364,7 @@ fn direction(
     match res {
         Err(e) if e.kind == ErrorKind::Convergence => {
             st.reason = format!("a finite-difference product failed: {}", e.message);
-            Ok(false)
+            Ok(None)
         }
         other => other,
     }
