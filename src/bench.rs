@@ -116,7 +116,7 @@ pub fn bench_linear(
     let cells = parse_cells(cells, [44, 44, 44])?;
     let name = pc_name.unwrap_or("block-jacobi");
     let kind = PcKind::parse(name)
-        .filter(|k| !matches!(k, PcKind::None | PcKind::Auto))
+        .filter(|k| !matches!(k, PcKind::None | PcKind::Auto | PcKind::AutoFactored))
         .ok_or_else(|| {
             Error::input(format!(
                 "--pc: expected block-jacobi, asm or amg, got `{name}`"
