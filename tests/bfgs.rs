@@ -116,7 +116,14 @@ fn compare(name: &str, text: &str) {
             assert!(s.stats.converged, "{name}: {what} step {}", s.step);
         }
     }
-    assert_eq!(newton.totals.steps, bfgs.totals.steps);
+    // Both end at the end time; their step sequences may differ (with the linear
+    // predictor Newton cuts steps of the small twisted block that BFGS does not).
+    assert_eq!(
+        newton.steps.last().map(|s| s.time),
+        Some(1.0),
+        "{name}: newton"
+    );
+    assert_eq!(bfgs.steps.last().map(|s| s.time), Some(1.0), "{name}: bfgs");
     let (d, s) = max_diff(&bfgs.u, &newton.u);
     eprintln!(
         "{name}: newton {} iterations, {} factorizations, {} residuals, {} GMRES; \
