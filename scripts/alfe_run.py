@@ -1,0 +1,33 @@
+"""One `alfe run` and what it left, shared by the study scripts (cylinder-study,
+indent-study, solver-table): the command under mpirun when ranks > 1, its exit code and
+last stderr line (or a timeout), then summary.json and history.csv of its output
+directory."""
+import csv
+import json
+import os
+import subprocess
+
+
+def run(cmd, ranks=1, timeout=None, oversubscribe=True):
+    """Run `cmd` (an `alfe run ...` argument list) on `ranks` ranks: (exit code or None
+    on timeout, last stderr line or the timeout)."""
+    if ranks > 1:
+        cmd = ["mpirun"] + (["--oversubscribe"] if oversubscribe else []) + ["-n", str(ranks)] + cmd
+    try:
+        p = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout)
+        return p.returncode, (p.stderr.strip().splitlines() or [""])[-1]
+    except subprocess.TimeoutExpired:
+        return None, f"timed out after {timeout:g} s"
+
+
+def results(out):
+    """(summary.json as a dict, history.csv as a list of row dicts) of the output directory
+    `out`; empty where a file is missing."""
+    summ, rows = {}, []
+    if os.path.exists(os.path.join(out, "summary.json")):
+        with open(os.path.join(out, "summary.json")) as f:
+            summ = json.load(f)
+    if os.path.exists(os.path.join(out, "history.csv")):
+        with open(os.path.join(out, "history.csv")) as f:
+            rows = list(csv.DictReader(f))
+    return summ, rows
