@@ -245,6 +245,115 @@ fn bad_wall_decks_name_the_field() {
     }
 }
 
+/// The sliding block with the floor doing both motions (the top held): pressed up
+/// 0.1 over t ∈ [0, 1], then slid 0.5 along x over t ∈ [1, 3].
+fn floor_moves(motion: &str) -> String {
+    let d = builtin("sliding-block");
+    let d = edit(
+        &d,
+        "type = \"displacement\"\nset = \"top\"\ncomponents = [\"z\"]\nvalue = -0.1\ncurve = \"press\"",
+        "type = \"fixed\"\nset = \"top\"\ncomponents = [\"z\"]",
+    );
+    edit(
+        &d,
+        "motion = { translation = [0.5, 0, 0], curve = \"slide\" }",
+        motion,
+    )
+}
+
+/// One motion specification, three forms: "press, then slide" as segments in sequence
+/// gives the same run as per-DOF curves, bit for bit, and the original one-direction
+/// form is per-DOF curves with one curve. The floor ends where the segments say, the
+/// block slips at μN and nothing penetrates.
+#[test]
+fn press_then_slide_as_segments_or_per_dof_curves() {
+    let seg = run_deck(
+        "seg",
+        &floor_moves(
+            "motion = { segments = [{ to = 1.0, translation = [0, 0, 0.1] }, { to = 3.0, translation = [0.5, 0, 0] }] }",
+        ),
+    );
+    let dof = run_deck(
+        "dof",
+        &floor_moves(
+            "motion = { ux = { curve = \"slide\", scale = 0.5 }, uz = { curve = \"press\", scale = 0.1 } }",
+        ),
+    );
+    for name in [
+        "floor.fx",
+        "floor.fz",
+        "floor.ux",
+        "floor.uz",
+        "max_penetration",
+    ] {
+        assert_eq!(column(&seg, name), column(&dof, name), "{name}");
+    }
+    let (ux, uz) = (column(&seg, "floor.ux"), column(&seg, "floor.uz"));
+    let k1 = (0..ux.len()).find(|&k| ux[k] > 0.0).unwrap();
+    assert!((uz[k1 - 1] - 0.1).abs() < 1e-15 && ux[k1 - 1] == 0.0);
+    let last = ux.len() - 1;
+    assert!((ux[last] - 0.5).abs() < 1e-15 && (uz[last] - 0.1).abs() < 1e-15);
+    let (fx, fz) = (column(&seg, "floor.fx"), column(&seg, "floor.fz"));
+    let ratio = fx[last].abs() / fz[last].abs();
+    assert!((ratio - 0.3).abs() < 1e-6, "|fx/fz| = {ratio}");
+    assert!(column(&seg, "max_penetration").iter().all(|&p| p <= 1e-8));
+    // The original form and its per-DOF spelling.
+    let one = run_deck("one", &builtin("sliding-block"));
+    let per = run_deck(
+        "per",
+        &edit(
+            &builtin("sliding-block"),
+            "motion = { translation = [0.5, 0, 0], curve = \"slide\" }",
+            "motion = { ux = { curve = \"slide\", scale = 0.5 } }",
+        ),
+    );
+    for name in ["floor.fx", "floor.fz", "floor.ux", "floor.rz"] {
+        assert_eq!(column(&one, name), column(&per, name), "{name}");
+    }
+}
+
+/// Motion mistakes name the field; "press, then slide" written as a list of
+/// translations (a new user's first try) is told how to write it.
+#[test]
+fn bad_wall_motions_name_the_field() {
+    let slide = "motion = { translation = [0.5, 0, 0], curve = \"slide\" }";
+    for (to, want) in [
+        (
+            "motion = { translation = [[0, 0, -2], [20, 0, 0]] }",
+            "walls[0].motion.translation: expected one vector [x, y, z] (the motion's total); for motions in sequence",
+        ),
+        (
+            "motion = { translation = [0.5, 0, 0], ux = { curve = \"slide\" } }",
+            "walls[0].motion: give the motion in one form, not translation/axis/angle and ux … rz together",
+        ),
+        (
+            "motion = { segments = [{ to = 1.0, translation = [0, 0, 1] }, { to = 1.0 }] }",
+            "walls[0].motion.segments[1].to: expected an end time after 1",
+        ),
+        (
+            "motion = { segments = [] }",
+            "walls[0].motion.segments: expected at least one segment",
+        ),
+        (
+            "motion = { uz = { curve = \"nope\" } }",
+            "walls[0].motion.uz.curve",
+        ),
+        (
+            "motion = { uz = { scale = 1, speed = 2 } }",
+            "walls[0].motion.uz.speed: unknown field `speed`",
+        ),
+        (
+            "motion = { rotation_curve = \"slide\" }",
+            "walls[0].motion.rotation_curve: given without `axis` and `angle`",
+        ),
+    ] {
+        let e = try_run_deck("badmotion", &edit(&builtin("sliding-block"), slide, to))
+            .err()
+            .expect("must fail");
+        assert!(e.message.contains(want), "{want}\n got: {}", e.message);
+    }
+}
+
 /// `hourglass` is refused where no spring exists and when negative, naming the field.
 #[test]
 fn bad_hourglass_values_name_the_part_field() {

@@ -198,11 +198,11 @@ fn alm_wall_reactions_fields_and_geometry() {
     assert!(o.summary.converged);
     assert_eq!(o.steps.len(), 2);
 
-    // History: the wall's nine columns, then penetration and the counts, last.
+    // History: the wall's twelve columns, then penetration and the counts, last.
     let (head, rows) = history(&out);
     let n = head.len();
     assert_eq!(
-        head[n - 12..],
+        head[n - 15..],
         [
             "floor.fx",
             "floor.fy",
@@ -213,6 +213,9 @@ fn alm_wall_reactions_fields_and_geometry() {
             "floor.ux",
             "floor.uy",
             "floor.uz",
+            "floor.rx",
+            "floor.ry",
+            "floor.rz",
             "max_penetration",
             "contact_active",
             "contact_sticking"
@@ -237,7 +240,9 @@ fn alm_wall_reactions_fields_and_geometry() {
         assert!((r["floor.mx"] / fz - 0.5).abs() < 0.01, "{r:?}");
         assert!((r["floor.my"] / fz + 0.5).abs() < 0.01, "{r:?}");
         assert!(r["floor.mz"].abs() < 1e-9);
-        for c in ["floor.ux", "floor.uy", "floor.uz"] {
+        for c in [
+            "floor.ux", "floor.uy", "floor.uz", "floor.rx", "floor.ry", "floor.rz",
+        ] {
             assert_eq!(r[c], 0.0);
         }
         // ALM: no penetration; all nine bottom nodes in contact, none sticking (μ = 0).

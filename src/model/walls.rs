@@ -395,8 +395,9 @@ impl Wall {
     }
 }
 
-/// Column layout of a wall: force, moment, displacement, then the shared ones.
-const N_OWN_COLUMNS: usize = 9;
+/// Column layout of a wall: force, moment, displacement, rotation vector, then the
+/// shared ones.
+const N_OWN_COLUMNS: usize = 12;
 
 impl Contribution for Wall {
     fn name(&self) -> &str {
@@ -519,7 +520,8 @@ impl Contribution for Wall {
     }
 
     /// `<wall>.fx … .mz`: force and moment on the wall (about its current origin) at the
-    /// last evaluation, `<wall>.ux … .uz` its prescribed displacement; shared:
+    /// last evaluation, `<wall>.ux … .uz` its prescribed displacement and `.rx … .rz` its
+    /// rotation vector; shared:
     /// `max_penetration` (max(0, −g_N) over all tracked nodes of all walls),
     /// `contact_active`, `contact_sticking`, and for frictional ALM walls
     /// `max_cone_excess`: how far outside the Coulomb cone a sticking node's force lies,
@@ -532,7 +534,7 @@ impl Contribution for Wall {
             .map(|s| Column::sum(format!("{w}.{s}")))
             .collect();
         c.extend(
-            ["ux", "uy", "uz"]
+            ["ux", "uy", "uz", "rx", "ry", "rz"]
                 .iter()
                 .map(|s| Column::replicated(format!("{w}.{s}"))),
         );
@@ -587,13 +589,19 @@ impl Contribution for Wall {
             }
         }
         out[6..9].copy_from_slice(&self.def.motion.displacement(self.t_new));
+        out[9..12].copy_from_slice(&self.def.motion.rotation(self.t_new));
     }
     fn summary(&self, values: &[f64]) -> Option<SummaryEntry> {
         let v = |a: usize| [values[a], values[a + 1], values[a + 2]];
         Some((
             "walls",
             self.def.name.clone(),
-            serde_json::json!({ "force": v(0), "moment": v(3), "displacement": v(6) }),
+            serde_json::json!({
+                "force": v(0),
+                "moment": v(3),
+                "displacement": v(6),
+                "rotation": v(9),
+            }),
         ))
     }
 
@@ -778,12 +786,10 @@ mod tests {
             let def = WallDef {
                 name: "floor".into(),
                 shape: ShapeDef::Plane { display_size: 1.0 },
-                motion: RigidMotion {
-                    origin: [0.0; 3],
-                    axes: [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
-                    translation: None,
-                    rotation: None,
-                },
+                motion: RigidMotion::fixed(
+                    [0.0; 3],
+                    [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
+                ),
                 friction: 0.5,
                 method: ContactMethod::Alm,
                 kappa: Some(1.0),

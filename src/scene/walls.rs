@@ -3,7 +3,7 @@
 //! needs: sizes, axes, a tracked set that exists and no tracked node starting inside.
 
 use crate::contact::law::{Threshold, DEFAULT_TANGENTIAL_AUGMENTATION};
-use crate::contact::motion::{MotionKind, RigidMotion, Rotation, Translation};
+use crate::contact::motion::{DofMotion, MotionKind, RigidMotion, DOF_NAMES};
 use crate::contact::wall::{project, ContactMethod, ShapeDef};
 use crate::curve::Curve;
 use crate::mesh::select::tributary_areas;
@@ -80,16 +80,25 @@ pub struct WallDeck {
     pub motion: Option<WallMotionDeck>,
 }
 
-/// Prescribed rigid motion: translation `translation × c(t)` and a rotation by
-/// `angle × c(t)` (radians, right hand) about `axis` through the wall's moving origin;
-/// `type = "velocity"` integrates c instead. Default curves: a ramp 0 → 1 over the
-/// analysis for displacements, the constant 1 for velocities.
+/// Prescribed rigid motion, in one of three forms (not mixed):
+/// * one direction: translation `translation × c(t)` and a rotation by `angle × c(t)`
+///   (radians, right hand) about `axis` through the wall's moving origin;
+/// * per degree of freedom: `ux`, `uy`, `uz`, `rx`, `ry`, `rz`, each
+///   `{ curve = "name", scale = s, type = "velocity" }` (LS-DYNA's
+///   `*BOUNDARY_PRESCRIBED_MOTION_RIGID`); rx, ry, rz are the rotation vector's
+///   components;
+/// * `segments` in sequence, each `{ to = t, translation = [...], rotation = [...] }`
+///   moving linearly in time from the previous segment's end (t = 0 for the first) by
+///   those increments: press, then slide, then lift.
+///
+/// `type = "velocity"` integrates the curves instead. Default curves: a ramp 0 → 1 over
+/// the analysis for displacements, the constant 1 for velocities.
 #[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct WallMotionDeck {
     #[serde(default, rename = "type")]
     pub kind: MotionKind,
-    #[serde(default)]
+    #[serde(default, deserialize_with = "one_vector")]
     pub translation: Option<[f64; 3]>,
     #[serde(default)]
     pub curve: Option<String>,
@@ -99,6 +108,75 @@ pub struct WallMotionDeck {
     pub angle: Option<f64>,
     #[serde(default)]
     pub rotation_curve: Option<String>,
+    #[serde(default)]
+    pub ux: Option<DofDeck>,
+    #[serde(default)]
+    pub uy: Option<DofDeck>,
+    #[serde(default)]
+    pub uz: Option<DofDeck>,
+    #[serde(default)]
+    pub rx: Option<DofDeck>,
+    #[serde(default)]
+    pub ry: Option<DofDeck>,
+    #[serde(default)]
+    pub rz: Option<DofDeck>,
+    #[serde(default)]
+    pub segments: Option<Vec<SegmentDeck>>,
+}
+
+/// One prescribed DOF: `scale × c(t)`, or `scale × ∫c` with `type = "velocity"` (default:
+/// the motion's `type`).
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct DofDeck {
+    #[serde(default)]
+    pub curve: Option<String>,
+    #[serde(default = "one")]
+    pub scale: f64,
+    #[serde(default, rename = "type")]
+    pub kind: Option<MotionKind>,
+}
+
+/// One segment of a motion in sequence: by `translation` and `rotation` (rotation-vector
+/// increment, radians) linearly in time until `to`.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct SegmentDeck {
+    pub to: f64,
+    #[serde(default)]
+    pub translation: [f64; 3],
+    #[serde(default)]
+    pub rotation: [f64; 3],
+}
+
+fn one() -> f64 {
+    1.0
+}
+
+/// `translation` is one vector; a list of vectors (a new user's way to write "press,
+/// then slide") gets the form that does it.
+fn one_vector<'de, D: serde::Deserializer<'de>>(
+    d: D,
+) -> std::result::Result<Option<[f64; 3]>, D::Error> {
+    use serde::de::Error as _;
+    let v = toml::Value::deserialize(d)?;
+    let num = |x: &toml::Value| x.as_float().or_else(|| x.as_integer().map(|i| i as f64));
+    match &v {
+        toml::Value::Array(a) if a.len() == 3 && a.iter().all(|x| num(x).is_some()) => Ok(Some([
+            num(&a[0]).unwrap(),
+            num(&a[1]).unwrap(),
+            num(&a[2]).unwrap(),
+        ])),
+        toml::Value::Array(a) if a.iter().any(|x| x.is_array()) => Err(D::Error::custom(
+            "expected one vector [x, y, z] (the motion's total); for motions in sequence \
+             (press, then slide) write `segments = [{ to = 1.0, translation = [0, 0, -2] }, \
+             { to = 2.0, translation = [20, 0, 0] }]`, or give each DOF a curve \
+             (`ux = { curve = \"name\" }`)",
+        )),
+        other => Err(D::Error::custom(format!(
+            "expected one vector [x, y, z], got {other}"
+        ))),
+    }
 }
 
 fn ez() -> [f64; 3] {
@@ -145,6 +223,162 @@ pub struct WallInputs<'a> {
     pub curve: &'a dyn Fn(String, &Option<String>) -> Result<Curve>,
     /// Tolerance for "starts inside" (a small fraction of the model size).
     pub tol: f64,
+}
+
+/// A wall's motion from any of the deck's three forms (see [`WallMotionDeck`]).
+fn build_motion(
+    m: &WallMotionDeck,
+    mf: &str,
+    origin: [f64; 3],
+    axes: [[f64; 3]; 3],
+    inp: &WallInputs,
+) -> Result<RigidMotion> {
+    let mut motion = RigidMotion::fixed(origin, axes);
+    let curve = |field: &str, name: &Option<String>, kind: MotionKind| -> Result<Curve> {
+        match (name, kind) {
+            (None, MotionKind::Velocity) => Ok(Curve::constant(1.0)),
+            _ => (inp.curve)(format!("{mf}.{field}"), name),
+        }
+    };
+    let one_direction = m.translation.is_some()
+        || m.curve.is_some()
+        || m.axis.is_some()
+        || m.angle.is_some()
+        || m.rotation_curve.is_some();
+    let per_dof = [&m.ux, &m.uy, &m.uz, &m.rx, &m.ry, &m.rz];
+    let forms = [
+        (one_direction, "translation/axis/angle"),
+        (per_dof.iter().any(|d| d.is_some()), "ux … rz"),
+        (m.segments.is_some(), "segments"),
+    ];
+    let given: Vec<&str> = forms.iter().filter(|f| f.0).map(|f| f.1).collect();
+    if given.len() > 1 {
+        return Err(err(
+            mf,
+            format!(
+                "give the motion in one form, not {} together",
+                given.join(" and ")
+            ),
+        ));
+    }
+    if let Some(v) = m.translation {
+        if v.iter().any(|x| !x.is_finite()) {
+            return Err(err(format!("{mf}.translation"), "expected finite numbers"));
+        }
+        let c = curve("curve", &m.curve, m.kind)?;
+        for (dof, &scale) in motion.dofs[..3].iter_mut().zip(&v) {
+            *dof = Some(DofMotion {
+                kind: m.kind,
+                scale,
+                curve: c.clone(),
+            });
+        }
+    } else if m.curve.is_some() {
+        return Err(err(format!("{mf}.curve"), "given without `translation`"));
+    }
+    match (m.axis, m.angle) {
+        (Some(a), Some(angle)) => {
+            if !angle.is_finite() {
+                return Err(err(format!("{mf}.angle"), "expected a finite number"));
+            }
+            let a = unit(format!("{mf}.axis"), a)?;
+            let c = curve("rotation_curve", &m.rotation_curve, m.kind)?;
+            for (dof, &ai) in motion.dofs[3..].iter_mut().zip(&a) {
+                *dof = Some(DofMotion {
+                    kind: m.kind,
+                    scale: ai * angle,
+                    curve: c.clone(),
+                });
+            }
+        }
+        (None, None) if m.rotation_curve.is_some() => {
+            return Err(err(
+                format!("{mf}.rotation_curve"),
+                "given without `axis` and `angle`",
+            ))
+        }
+        (None, None) => {}
+        _ => return Err(err(mf, "a rotation needs both `axis` and `angle`")),
+    }
+    for (i, d) in per_dof.iter().enumerate() {
+        if let Some(d) = d {
+            let field = format!("{}.scale", DOF_NAMES[i]);
+            if !d.scale.is_finite() {
+                return Err(err(format!("{mf}.{field}"), "expected a finite number"));
+            }
+            let kind = d.kind.unwrap_or(m.kind);
+            motion.dofs[i] = Some(DofMotion {
+                kind,
+                scale: d.scale,
+                curve: curve(&format!("{}.curve", DOF_NAMES[i]), &d.curve, kind)?,
+            });
+        }
+    }
+    if let Some(segs) = &m.segments {
+        if m.kind == MotionKind::Velocity {
+            return Err(err(
+                format!("{mf}.type"),
+                "segments give displacements (increments per segment); drop `type = \"velocity\"`",
+            ));
+        }
+        motion.dofs = segments(segs, mf)?;
+    }
+    Ok(motion)
+}
+
+/// Per-DOF displacement curves through the segments' cumulative increments.
+fn segments(segs: &[SegmentDeck], mf: &str) -> Result<[Option<DofMotion>; 6]> {
+    if segs.is_empty() {
+        return Err(err(
+            format!("{mf}.segments"),
+            "expected at least one segment",
+        ));
+    }
+    let mut points: Vec<Vec<[f64; 2]>> = vec![vec![[0.0, 0.0]]; 6];
+    let mut t0 = 0.0;
+    for (k, s) in segs.iter().enumerate() {
+        let sf = format!("{mf}.segments[{k}]");
+        if !(s.to.is_finite() && s.to > t0) {
+            return Err(err(
+                format!("{sf}.to"),
+                format!(
+                    "expected an end time after {t0} (the previous segment's end), got {}",
+                    s.to
+                ),
+            ));
+        }
+        for (field, v) in [("translation", s.translation), ("rotation", s.rotation)] {
+            if v.iter().any(|x| !x.is_finite()) {
+                return Err(err(format!("{sf}.{field}"), "expected finite numbers"));
+            }
+        }
+        let inc = [
+            s.translation[0],
+            s.translation[1],
+            s.translation[2],
+            s.rotation[0],
+            s.rotation[1],
+            s.rotation[2],
+        ];
+        for i in 0..6 {
+            let last = points[i].last().unwrap()[1];
+            points[i].push([s.to, last + inc[i]]);
+        }
+        t0 = s.to;
+    }
+    let mut dofs: [Option<DofMotion>; 6] = Default::default();
+    for i in 0..6 {
+        if points[i].iter().any(|p| p[1] != 0.0) {
+            dofs[i] = Some(DofMotion {
+                kind: MotionKind::Displacement,
+                scale: 1.0,
+                curve: Curve {
+                    points: std::mem::take(&mut points[i]),
+                },
+            });
+        }
+    }
+    Ok(dofs)
 }
 
 /// Validate and build every `[[walls]]` entry.
@@ -325,48 +559,10 @@ fn build_wall(w: &WallDeck, f: &str, inp: &WallInputs) -> Result<WallDef> {
         .iter()
         .map(|n| area.get(n).copied().unwrap_or(0.0))
         .collect();
-    // Motion.
-    let mut motion = RigidMotion {
-        origin: w.point,
-        axes: [ex, ey, ez],
-        translation: None,
-        rotation: None,
+    let motion = match &w.motion {
+        None => RigidMotion::fixed(w.point, [ex, ey, ez]),
+        Some(m) => build_motion(m, &format!("{f}.motion"), w.point, [ex, ey, ez], inp)?,
     };
-    if let Some(m) = &w.motion {
-        let mf = format!("{f}.motion");
-        let curve = |field: &str, name: &Option<String>| -> Result<Curve> {
-            match (name, m.kind) {
-                (None, MotionKind::Velocity) => Ok(Curve {
-                    points: vec![[0.0, 1.0]],
-                }),
-                _ => (inp.curve)(format!("{mf}.{field}"), name),
-            }
-        };
-        if let Some(v) = m.translation {
-            if v.iter().any(|x| !x.is_finite()) {
-                return Err(err(format!("{mf}.translation"), "expected finite numbers"));
-            }
-            motion.translation = Some(Translation {
-                kind: m.kind,
-                value: v,
-                curve: curve("curve", &m.curve)?,
-            });
-        } else if m.curve.is_some() {
-            return Err(err(format!("{mf}.curve"), "given without `translation`"));
-        }
-        match (m.axis, m.angle) {
-            (Some(a), Some(angle)) => {
-                motion.rotation = Some(Rotation {
-                    kind: m.kind,
-                    axis: unit(format!("{mf}.axis"), a)?,
-                    angle,
-                    curve: curve("rotation_curve", &m.rotation_curve)?,
-                })
-            }
-            (None, None) => {}
-            _ => return Err(err(&mf, "a rotation needs both `axis` and `angle`")),
-        }
-    }
     // A plane without a display size is drawn as large as the model.
     if let ShapeDef::Plane { display_size } = &mut shape {
         if *display_size == 0.0 {

@@ -34,10 +34,13 @@ const ETA_MAX: f64 = 0.1;
 const ETA_IMPOSE: f64 = 1e-4;
 /// GMRES iterations under the lagged preconditioner beyond which it is refreshed at the
 /// next iterate: it struggles there, and its finite-difference products then cost more
-/// than a refactorization. cylinder-press, jfnk (iterations, GMRES iterations, wall):
-/// never 128 / 4661 / 10.2 s; 60 → 119 / 2694 / 6.2 s; 30 → 123 / 1754 / 4.8 s;
-/// 15 → 156 / 1395 / 4.2 s with a retry.
-const REFRESH_AFTER_GMRES: usize = 30;
+/// than a refactorization (on rubber-indent one assembly and factorization costs about
+/// 14 residual evaluations). jfnk (iterations, GMRES iterations, wall, side by side):
+/// rubber-indent, 30 → 288 / 7036 / 79 s, 15 → 297 / 4077 / 51 s, 8 → 325 / 4980;
+/// cook-membrane 30 → 86 iterations / 77 s, 15 → 73 / 45 s; cylinder-press
+/// never 128 / 4661 / 10.2 s, 60 → 119 / 2694 / 6.2 s, 30 → 123 / 1754 / 4.8 s,
+/// 15 → 156 / 1395 / 4.2 s with a retry (`scripts/solver-table`, issue 11).
+const REFRESH_AFTER_GMRES: usize = 15;
 
 /// The finite-difference Jacobian of `problem` at `u` (whose residual is `r0`), acting
 /// on the free dofs; constrained rows are the identity.
