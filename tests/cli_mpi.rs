@@ -1133,3 +1133,52 @@ fn halo_exchanges_message_only_neighbours() {
         }
     }
 }
+
+/// A contact entity on 2 ranks (its tracked nodes owned by both, its six unknowns by
+/// one and read by the other): a sphere with a free rotation pressed and rolled
+/// (`tests/entity-roll.toml`, the rolling deck of `tests/entities.rs` on a coarse mesh)
+/// gives the 1-rank displacements, forces and rotation.
+#[test]
+fn entity_roll_same_on_one_and_two_ranks() {
+    let dir = temp_dir("rank-entity");
+    let deck = dir.join("roll.toml");
+    std::fs::write(&deck, include_str!("entity-roll.toml")).unwrap();
+    let check = ok(alfe(&dir, 1, &["check", "roll.toml", "--ranks", "2"]));
+    assert!(
+        check.contains("entity ball: nodes owned by rank(s) 0,1"),
+        "{check}"
+    );
+    ok(alfe(
+        &dir,
+        1,
+        &["run", "roll.toml", "--out", "r1", "--quiet"],
+    ));
+    ok(alfe(
+        &dir,
+        2,
+        &[
+            "run",
+            "roll.toml",
+            "--out",
+            "r2",
+            "--partitions",
+            "parts",
+            "--quiet",
+        ],
+    ));
+    let (a, b) = (dir.join("r1"), dir.join("r2"));
+    assert_same_runs_counts(&a, &b, "roll", false);
+    let (ha, hb) = (
+        history(&a.join("history.csv")),
+        history(&b.join("history.csv")),
+    );
+    let col = |h: &Vec<Vec<String>>, name: &str| -> Vec<f64> {
+        let i = h[0].iter().position(|c| c == name).unwrap();
+        h[1..].iter().map(|r| r[i].parse().unwrap()).collect()
+    };
+    let (ra, rb) = (col(&ha, "ball.ry"), col(&hb, "ball.ry"));
+    assert!(*ra.last().unwrap() > 0.9, "it rolled: {ra:?}");
+    for (x, y) in ra.iter().zip(&rb) {
+        assert!((x - y).abs() < 1e-8, "ball.ry {x} vs {y}");
+    }
+}

@@ -5,6 +5,7 @@
 //! and the summary are read off the same list. It knows physics and calls the parallel
 //! layer only through [`Comm`], the unknown map and the distributed matrix.
 
+pub mod body;
 pub mod contribution;
 pub mod coupling;
 pub mod def;

@@ -5,10 +5,15 @@
 //! Jacobian blocks. The wall publishes its force, moment and prescribed displacement,
 //! the shared contact columns (penetration, active and sticking counts), the nodal
 //! contact fields and its moving surface.
+//!
+//! A **contact entity** is the same wall on a rigid body whose six DOFs are unknowns
+//! ([`super::body`]): each prescribed by the motion's curve or free; its pose comes from
+//! the unknowns, and its tracked nodes' forces enter the body's rows.
 
 // Index loops over 3×3 frames read like the formulas.
 #![allow(clippy::needless_range_loop)]
 
+use super::body::{Body, BodyDef, Contact};
 use super::contribution::{
     Center, Column, Combine, Contribution, Evaluation, FieldSpec, GridSpec, Reduce, Reference,
     State, SummaryEntry,
@@ -55,11 +60,18 @@ pub struct WallDef {
     pub nodes: Vec<usize>,
     /// Tributary area of each tracked node on the tracked surface (0 where unknown).
     pub areas: Vec<f64>,
+    /// A contact entity's body (free DOFs, loads, traced points); None for a wall.
+    #[serde(default)]
+    pub body: Option<BodyDef>,
 }
 
 impl ContributionKind for WallDef {
     fn kind_name(&self) -> &'static str {
-        "wall"
+        if self.body.is_some() {
+            "entity"
+        } else {
+            "wall"
+        }
     }
     fn name(&self) -> &str {
         &self.name
@@ -68,15 +80,34 @@ impl ContributionKind for WallDef {
         self.nodes.clone()
     }
     fn extra_unknowns(&self) -> usize {
-        if self.method == ContactMethod::Alm {
+        let body = if self.body.is_some() { 6 } else { 0 };
+        body + if self.method == ContactMethod::Alm {
             3 * self.nodes.len()
         } else {
             0
         }
     }
     fn describe(&self) -> String {
+        let free = match &self.body {
+            Some(b) => {
+                let f: Vec<&str> = (0..6)
+                    .filter(|&k| b.free[k])
+                    .map(|k| crate::contact::motion::DOF_NAMES[k])
+                    .collect();
+                format!(
+                    ", free: {}",
+                    if f.is_empty() {
+                        "none".to_string()
+                    } else {
+                        f.join(" ")
+                    }
+                )
+            }
+            None => String::new(),
+        };
         format!(
-            "wall {}: {} {}, μ = {}, {} tracked nodes ({})",
+            "{} {}: {} {}, μ = {}, {} tracked nodes ({}){free}",
+            self.kind_name(),
             self.name,
             self.method.name(),
             self.shape.build().kind(),
@@ -94,14 +125,34 @@ impl ContributionKind for WallDef {
             .filter_map(|(&n, &a)| l.owned(n).map(|ln| (ln, a)))
             .collect();
         mine.sort_by_key(|p| p.0);
+        // A body's unknowns belong to the rank owning most of its tracked nodes (the
+        // lowest on a tie): the same on every rank.
+        let body = self.body.as_ref().map(|b| {
+            let mut per_rank = vec![0usize; l.ranks];
+            for &n in &self.nodes {
+                per_rank[l.owner[n] as usize] += 1;
+            }
+            let owner = (0..l.ranks).fold(0, |b, r| if per_rank[r] > per_rank[b] { r } else { b });
+            BodyDef { owner, ..b.clone() }
+        });
         WallDef {
             nodes: mine.iter().map(|p| p.0).collect(),
             areas: mine.iter().map(|p| p.1).collect(),
+            body,
             ..self.clone()
         }
     }
     fn build(&self, mesh: &LocalMesh, _elements: &LocalElements) -> Box<dyn Contribution> {
-        Box::new(Wall::new(self.clone(), &mesh.coords))
+        Box::new(Wall::new(self.clone(), &mesh.coords, mesh.rank))
+    }
+    fn explicit_ok(&self) -> Result<(), String> {
+        match &self.body {
+            Some(_) => Err(format!(
+                "entity `{}`: contact entities need a static analysis (the body has no mass for the explicit update)",
+                self.name
+            )),
+            None => Ok(()),
+        }
     }
     fn set_contact_method(&mut self, m: ContactMethod) {
         self.method = m;
@@ -157,6 +208,8 @@ pub struct Wall {
     pub last: Vec<NodeContact>,
     /// Stick/slip flips of each node since the last commit.
     flips: Vec<u32>,
+    /// A contact entity's body.
+    pub body: Option<Body>,
 }
 
 /// Local residual and Jacobian blocks of one tracked node.
@@ -172,6 +225,8 @@ struct NodeEval {
     k_ll: [[f64; 3]; 3],
     ft_new: [f64; 3],
     normal: Option<[f64; 3]>,
+    /// The node's projection on the wall.
+    point: Option<[f64; 3]>,
 }
 
 fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
@@ -189,8 +244,9 @@ fn flat(a: [[f64; 3]; 3]) -> [f64; 9] {
 }
 
 impl Wall {
-    pub fn new(def: WallDef, coords: &[[f64; 3]]) -> Self {
+    pub fn new(def: WallDef, coords: &[[f64; 3]], rank: usize) -> Self {
         let n = def.nodes.len();
+        let body = def.body.clone().map(|b| Body::new(b, rank, &def.motion));
         let x0: Vec<[f64; 3]> = def.nodes.iter().map(|&i| coords[i]).collect();
         Self {
             shape: def.shape.build(),
@@ -208,7 +264,16 @@ impl Wall {
             ft_new: vec![[0.0; 3]; n],
             last: vec![NodeContact::default(); n],
             flips: vec![0; n],
+            body,
             def,
+        }
+    }
+
+    /// The pose of the last evaluation (after a commit: the converged one).
+    fn pose_now(&self) -> Pose {
+        match &self.body {
+            Some(b) => b.pose_new(),
+            None => self.def.motion.pose(self.t_new),
         }
     }
 
@@ -270,6 +335,7 @@ impl Wall {
             k_ll: [[0.0; 3]; 3],
             ft_new: [0.0; 3],
             normal: None,
+            point: None,
         };
         let kappa = self.kappa[j];
         let alm_wall = self.is_alm();
@@ -299,6 +365,7 @@ impl Wall {
         ];
         e.c.gap = wp.gap;
         e.normal = Some([p[0][0], p[1][0], p[2][0]]);
+        e.point = Some(wp.point);
         let mu = self.def.friction;
         // f_local (force on the node in the frame), ∂f_local/∂g, and for ALM ∂f/∂λ.
         let (fl, dfdg) = if alm_wall {
@@ -404,35 +471,55 @@ impl Contribution for Wall {
         &self.def.name
     }
 
-    /// ALM: three multipliers per tracked node, owned with the node.
+    /// ALM: three multipliers per tracked node, owned with the node; an entity: its
+    /// body's two blocks (translation, rotation), read by every rank.
     fn unknowns(&self) -> Unknowns {
-        Unknowns {
-            owned: if self.is_alm() {
-                self.def.nodes.len()
-            } else {
-                0
+        let owned = if self.is_alm() {
+            self.def.nodes.len()
+        } else {
+            0
+        };
+        match &self.def.body {
+            Some(b) => Unknowns {
+                owned,
+                global: 2,
+                owner: b.owner,
+                reads_global: true,
             },
-            ..Unknowns::default()
+            None => Unknowns {
+                owned,
+                ..Unknowns::default()
+            },
         }
     }
     fn bind(&mut self, dofs: &DofMap, index: usize) {
+        let placed = dofs.placed(index);
         if self.is_alm() {
-            self.mult = Some(dofs.placed(index).owned_local);
+            self.mult = Some(placed.owned_local);
+        }
+        if let Some(b) = &mut self.body {
+            b.bind(dofs, placed.global_first);
         }
     }
     fn pattern(&self, dofs: &DofMap, out: &mut Vec<(usize, usize)>) {
         for (j, &n) in self.def.nodes.iter().enumerate() {
             let a = dofs.global_block(n);
             out.push((a, a));
-            if let Some(m0) = self.mult {
-                let m = dofs.global_block(m0 + j);
+            let m = self.mult.map(|m0| dofs.global_block(m0 + j));
+            if let Some(m) = m {
                 out.extend_from_slice(&[(a, m), (m, a), (m, m)]);
             }
+            if let Some(b) = &self.body {
+                b.pattern(a, m, out);
+            }
+        }
+        if let Some(b) = &self.body {
+            b.own_pattern(!self.def.nodes.is_empty(), out);
         }
     }
 
     fn wants_reference(&self) -> bool {
-        !self.def.nodes.is_empty()
+        !self.def.nodes.is_empty() || self.body.is_some()
     }
     /// The nodal stiffness of every tracked node from the reference stiffness: the
     /// penalty stiffness is `penalty_scale` times the diagonal (bulk-dominated, as
@@ -442,6 +529,9 @@ impl Contribution for Wall {
     /// Alart–Curnier-type semi-smooth Newton wants it of the order of E·h, and a
     /// bulk-dominated κ (rubber: K/G ~ 1000) made the stick/slip decisions cycle.
     fn setup(&mut self, r: &Reference) {
+        if let Some(b) = &mut self.body {
+            b.set_kappa(r.k_mean.max(f64::MIN_POSITIVE));
+        }
         for (j, &n) in self.def.nodes.iter().enumerate() {
             let (d, f) = (r.k_diag[n], r.e_factor[n]);
             self.k_node[j] = d.max(f64::MIN_POSITIVE);
@@ -460,7 +550,11 @@ impl Contribution for Wall {
         if self.explicit && self.is_alm() {
             return Ok(());
         }
-        let (pose, pose_old) = (self.def.motion.pose(ev.t), self.def.motion.pose(self.t_old));
+        let body = self.body.as_ref().map(|b| b.state(ev.u));
+        let (pose, pose_old) = match (&self.body, &body) {
+            (Some(b), Some(s)) => (s.pose, b.pose_old()),
+            _ => (self.def.motion.pose(ev.t), self.def.motion.pose(self.t_old)),
+        };
         for j in 0..self.def.nodes.len() {
             let n = self.def.nodes[j];
             let x = [
@@ -496,6 +590,24 @@ impl Contribution for Wall {
                     k.add_block(m, m, &flat(e.k_ll));
                 }
             }
+            if let (Some(b), Some(s), Some(xc), Some(nrm)) = (&self.body, &body, e.point, e.normal)
+            {
+                let a = ev.dofs.global_block(n);
+                let m = self.mult.map(|m0| ev.dofs.global_block(m0 + j));
+                let f = [-e.r_node[0], -e.r_node[1], -e.r_node[2]];
+                b.couple(
+                    ev,
+                    s,
+                    Contact {
+                        point: xc,
+                        normal: nrm,
+                        force: f,
+                    },
+                    a,
+                    m,
+                    [&e.k_xx, &e.k_xl, &e.k_lx],
+                );
+            }
             if ev.frozen {
                 continue;
             }
@@ -508,10 +620,26 @@ impl Contribution for Wall {
             }
             self.last[j] = now;
         }
+        if let Some(b) = &mut self.body {
+            b.own_rows(ev);
+            if !ev.frozen {
+                b.remember(body.as_ref().expect("a body has a state"));
+            }
+        }
         Ok(())
     }
 
+    /// An entity's prescribed DOFs.
+    fn prescribed(&self, t: f64, dofs: &DofMap, out: &mut Vec<(usize, f64)>) {
+        if let Some(b) = &self.body {
+            b.prescribed(&self.def.motion, t, dofs, out);
+        }
+    }
+
     fn commit(&mut self) {
+        if let Some(b) = &mut self.body {
+            b.commit();
+        }
         self.flips.iter_mut().for_each(|f| *f = 0);
         self.t_old = self.t_new;
         self.x_old.copy_from_slice(&self.x_new);
@@ -526,7 +654,9 @@ impl Contribution for Wall {
     /// `contact_active`, `contact_sticking`, and for frictional ALM walls
     /// `max_cone_excess`: how far outside the Coulomb cone a sticking node's force lies,
     /// max(0, ‖λ_T‖/(μ λ_N) − 1) (nonzero only for nodes locked in stick, at most
-    /// [`LOCK_MARGIN`] at a converged step).
+    /// [`LOCK_MARGIN`] at a converged step). An entity's `.ux … .rz` are its body's
+    /// unknowns (ψ, the accumulated incremental rotation vector, see [`super::body`]),
+    /// and each traced body-fixed point adds `<entity>.<point>.x/.y/.z`.
     fn columns(&self) -> Vec<Column> {
         let w = &self.def.name;
         let mut c: Vec<Column> = ["fx", "fy", "fz", "mx", "my", "mz"]
@@ -559,10 +689,17 @@ impl Contribution for Wall {
                 ..Column::sum("max_cone_excess")
             });
         }
+        if let Some(b) = &self.def.body {
+            for (p, _) in &b.trace {
+                for a in ["x", "y", "z"] {
+                    c.push(Column::replicated(format!("{w}.{p}.{a}")));
+                }
+            }
+        }
         c
     }
     fn column_values(&self, _s: &State, out: &mut [f64]) {
-        let origin = self.def.motion.pose(self.t_new).origin;
+        let origin = self.pose_now().origin;
         for (j, nc) in self.last.iter().enumerate() {
             let on_wall = [-nc.force[0], -nc.force[1], -nc.force[2]];
             let x = self.x_new[j];
@@ -588,13 +725,29 @@ impl Contribution for Wall {
                 }
             }
         }
-        out[6..9].copy_from_slice(&self.def.motion.displacement(self.t_new));
-        out[9..12].copy_from_slice(&self.def.motion.rotation(self.t_new));
+        match &self.body {
+            Some(b) => {
+                out[6..9].copy_from_slice(&b.displacement());
+                out[9..12].copy_from_slice(&b.rotation());
+                let first = N_OWN_COLUMNS + 3 + self.has_cone() as usize;
+                for (k, (_, x)) in b.def.trace.iter().enumerate() {
+                    out[first + 3 * k..first + 3 * k + 3].copy_from_slice(&b.point(*x));
+                }
+            }
+            None => {
+                out[6..9].copy_from_slice(&self.def.motion.displacement(self.t_new));
+                out[9..12].copy_from_slice(&self.def.motion.rotation(self.t_new));
+            }
+        }
     }
     fn summary(&self, values: &[f64]) -> Option<SummaryEntry> {
         let v = |a: usize| [values[a], values[a + 1], values[a + 2]];
         Some((
-            "walls",
+            if self.body.is_some() {
+                "entities"
+            } else {
+                "walls"
+            },
             self.def.name.clone(),
             serde_json::json!({
                 "force": v(0),
@@ -640,21 +793,55 @@ impl Contribution for Wall {
         }
     }
 
+    /// The surface where it is; an entity's traced points as a point grid too (one
+    /// vertex per point, each step: ParaView's "Temporal Particles To Pathlines" draws
+    /// their paths; the history has them as columns).
     fn grids(&self) -> Vec<GridSpec> {
         let (points, tris) = self.shape.surface();
-        vec![GridSpec {
-            name: format!("walls/{}", self.def.name),
-            label: format!("wall_{}", self.def.name),
+        let kind = if self.body.is_some() {
+            "entities"
+        } else {
+            "walls"
+        };
+        let label = if self.body.is_some() {
+            "entity"
+        } else {
+            "wall"
+        };
+        let mut g = vec![GridSpec {
+            name: format!("{kind}/{}", self.def.name),
+            label: format!("{label}_{}", self.def.name),
             attrs: vec![
                 ("name".into(), self.def.name.clone()),
                 ("shape".into(), self.shape.kind().into()),
             ],
             cells: tris.iter().map(|t| t.to_vec()).collect(),
             n_points: points.len(),
-        }]
+        }];
+        if let Some(b) = self.def.body.as_ref().filter(|b| !b.trace.is_empty()) {
+            g.push(GridSpec {
+                name: format!("{kind}/{}/trace", self.def.name),
+                label: format!("{label}_{}_trace", self.def.name),
+                attrs: vec![(
+                    "points".into(),
+                    b.trace
+                        .iter()
+                        .map(|p| p.0.as_str())
+                        .collect::<Vec<_>>()
+                        .join(","),
+                )],
+                cells: (0..b.trace.len()).map(|k| vec![k]).collect(),
+                n_points: b.trace.len(),
+            });
+        }
+        g
     }
-    fn grid_points(&self, _i: usize, t: f64, _values: &[f64]) -> Vec<[f64; 3]> {
-        let pose = self.def.motion.pose(t);
+    fn grid_points(&self, i: usize, t: f64, _values: &[f64]) -> Vec<[f64; 3]> {
+        let pose = match &self.body {
+            Some(b) if i == 1 => return b.def.trace.iter().map(|p| b.point(p.1)).collect(),
+            Some(b) => b.pose_new(),
+            None => self.def.motion.pose(t),
+        };
         self.shape
             .surface()
             .0
@@ -664,6 +851,7 @@ impl Contribution for Wall {
     }
 
     fn start_explicit(&mut self) -> Result<(), String> {
+        self.def.explicit_ok()?;
         self.explicit = true;
         Ok(())
     }
@@ -748,6 +936,10 @@ impl Contribution for Wall {
     /// impact's normal kinetic energy of these nodes is dissipated, as in a perfectly
     /// inelastic node-wall impact.
     fn persistency(&self, v: &mut [f64], a: &mut [f64], t: f64, h: f64) {
+        if self.body.is_some() {
+            // Entities take part in static analyses only (the scene refuses others).
+            return;
+        }
         let (pose, pose_old) = (self.def.motion.pose(t), self.def.motion.pose(t - h));
         for (j, &n) in self.def.nodes.iter().enumerate() {
             let c = &self.last[j];
@@ -800,6 +992,7 @@ mod tests {
                 set: "n".into(),
                 nodes: vec![0],
                 areas: vec![1.0],
+                body: None,
             };
             let coords = [[0.0; 3]];
             let dofs = DofMap::new(
@@ -811,7 +1004,7 @@ mod tests {
                     ..Default::default()
                 }],
             );
-            let mut w = Wall::new(def, &coords);
+            let mut w = Wall::new(def, &coords, 0);
             w.bind(&dofs, 0);
             let eval = |w: &mut Wall, lt: f64, frozen: bool| {
                 let u = [0.0, 0.0, 0.0, 1.0, lt, 0.0];

@@ -495,18 +495,32 @@ pub fn build(deck: &Deck, deck_dir: &Path) -> Result<Scene> {
         }
     };
 
-    let walls = super::walls::build_walls(
-        &deck.walls,
-        &super::walls::WallInputs {
-            mesh: &mesh,
-            boundary: &boundary,
-            part_names: deck.parts.iter().map(|p| p.name.clone()).collect(),
-            part_nodes: &part_nodes,
-            set_nodes: &set_nodes,
-            curve: &curve,
-            tol: 1e-8 * diag.max(1e-300),
-        },
-    )?;
+    let wall_inputs = super::walls::WallInputs {
+        mesh: &mesh,
+        boundary: &boundary,
+        part_names: deck.parts.iter().map(|p| p.name.clone()).collect(),
+        part_nodes: &part_nodes,
+        set_nodes: &set_nodes,
+        curve: &curve,
+        tol: 1e-8 * diag.max(1e-300),
+    };
+    let walls = super::walls::build_walls(&deck.walls, &wall_inputs, "walls")?;
+    let entities = super::walls::build_walls(&deck.entities, &wall_inputs, "entities")?;
+    if !deck.entities.is_empty() {
+        if deck.analysis.kind != AnalysisKind::Static {
+            return Err(err(
+                "entities",
+                "contact entities need a static analysis (their bodies have no mass or inertia yet); use a rigid wall with a prescribed motion in dynamics",
+            ));
+        }
+        if deck.solver.linear.preconditioner == crate::linalg::PcKind::Amg {
+            return Err(err(
+                "[solver.linear] preconditioner",
+                "\"amg\" needs an elliptic matrix, but the [[entities]] add rigid-body \
+                 unknowns coupled to all their tracked nodes; use \"block-jacobi\" or \"asm\"",
+            ));
+        }
+    }
 
     if !deck.couplings.is_empty() && deck.solver.linear.preconditioner == crate::linalg::PcKind::Amg
     {
@@ -542,6 +556,10 @@ pub fn build(deck: &Deck, deck_dir: &Path) -> Result<Scene> {
                 .collect::<Vec<_>>(),
         ),
         (
+            "entities",
+            deck.entities.iter().map(|w| w.name.as_str()).collect(),
+        ),
+        (
             "couplings",
             deck.couplings.iter().map(|c| c.name.as_str()).collect(),
         ),
@@ -559,6 +577,7 @@ pub fn build(deck: &Deck, deck_dir: &Path) -> Result<Scene> {
     let mut contributions: Vec<ContributionDef> =
         loads.into_iter().map(ContributionDef::Load).collect();
     contributions.extend(walls.into_iter().map(ContributionDef::Wall));
+    contributions.extend(entities.into_iter().map(ContributionDef::Wall));
     contributions.extend(couplings.into_iter().map(ContributionDef::Coupling));
     let partition = match &deck.partition {
         None => crate::partition::Method::Metis,
@@ -616,6 +635,9 @@ pub fn amg_unsuited(deck: &Deck) -> Option<String> {
     if !deck.couplings.is_empty() {
         return Some("[[couplings]] add constraint multipliers".into());
     }
+    if !deck.entities.is_empty() {
+        return Some("[[entities]] add rigid-body unknowns".into());
+    }
     if let Some(m) = deck.materials.iter().find(|m| m.nu > AUTO_AMG_MAX_NU) {
         return Some(format!(
             "material '{}' is nearly incompressible (nu = {} > {AUTO_AMG_MAX_NU})",
@@ -626,6 +648,9 @@ pub fn amg_unsuited(deck: &Deck) -> Option<String> {
         return Some(format!("material '{}' is plastic (j2)", m.name));
     }
     if let Some(w) = deck.walls.iter().find(|w| w.friction > 0.0) {
+        return Some(format!("wall '{}' has friction", w.name));
+    }
+    if let Some(w) = deck.entities.iter().find(|w| w.friction > 0.0) {
         return Some(format!("wall '{}' has friction", w.name));
     }
     None

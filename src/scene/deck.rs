@@ -35,6 +35,10 @@ pub struct Deck {
     /// Rigid walls (contact, DESIGN.md "Contact kinds").
     #[serde(default)]
     pub walls: Vec<super::walls::WallDeck>,
+    /// Contact entities: rigid bodies with analytical shapes whose DOFs are prescribed or
+    /// free (the paper's §3.5–3.6); the same table as a wall.
+    #[serde(default)]
+    pub entities: Vec<super::walls::WallDeck>,
     /// Distributing couplings (a reference point tied to nodes, RBE3).
     #[serde(default)]
     pub couplings: Vec<super::coupling::CouplingDeck>,

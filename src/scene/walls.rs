@@ -1,6 +1,9 @@
 //! `[[walls]]`: rigid walls in a deck (shape, placement, prescribed motion, friction,
 //! ALM or penalty, tracked nodes) turned into [`WallDef`]s, with the checks an analyst
 //! needs: sizes, axes, a tracked set that exists and no tracked node starting inside.
+//! `[[entities]]` (contact entities, rigid bodies) are the same table where a DOF may
+//! also be `type = "free"` or `type = "force"` (free, loaded by `scale × curve`), with
+//! body-fixed points to `trace`.
 
 use crate::contact::law::{Threshold, DEFAULT_TANGENTIAL_AUGMENTATION};
 use crate::contact::motion::{DofMotion, MotionKind, RigidMotion, DOF_NAMES};
@@ -8,6 +11,7 @@ use crate::contact::wall::{project, ContactMethod, ShapeDef};
 use crate::curve::Curve;
 use crate::mesh::select::tributary_areas;
 use crate::mesh::{FaceRef, Mesh};
+use crate::model::body::BodyDef;
 use crate::model::walls::WallDef;
 use crate::{Error, Result};
 use serde::{Deserialize, Serialize};
@@ -78,6 +82,28 @@ pub struct WallDeck {
     pub stick_lock_flips: u32,
     #[serde(default)]
     pub motion: Option<WallMotionDeck>,
+    /// Entities: body-fixed points whose paths are reported.
+    #[serde(default)]
+    pub trace: Option<Vec<TraceDeck>>,
+}
+
+/// A body-fixed point of an entity, by its position at t = 0.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct TraceDeck {
+    pub name: String,
+    pub point: [f64; 3],
+}
+
+/// What drives one DOF: a displacement or velocity curve (prescribed), or, for
+/// entities, nothing (`free`) or a force or moment curve (`force`: free and loaded).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum DofType {
+    Displacement,
+    Velocity,
+    Free,
+    Force,
 }
 
 /// Prescribed rigid motion, in one of three forms (not mixed):
@@ -124,8 +150,9 @@ pub struct WallMotionDeck {
     pub segments: Option<Vec<SegmentDeck>>,
 }
 
-/// One prescribed DOF: `scale × c(t)`, or `scale × ∫c` with `type = "velocity"` (default:
-/// the motion's `type`).
+/// One DOF: `scale × c(t)`, or `scale × ∫c` with `type = "velocity"` (default: the
+/// motion's `type`); for entities `type = "free"`, or `type = "force"`: free and loaded
+/// by `scale × c(t)` (a force, or a moment for rx … rz).
 #[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct DofDeck {
@@ -134,7 +161,7 @@ pub struct DofDeck {
     #[serde(default = "one")]
     pub scale: f64,
     #[serde(default, rename = "type")]
-    pub kind: Option<MotionKind>,
+    pub kind: Option<DofType>,
 }
 
 /// One segment of a motion in sequence: by `translation` and `rotation` (rotation-vector
@@ -225,15 +252,21 @@ pub struct WallInputs<'a> {
     pub tol: f64,
 }
 
-/// A wall's motion from any of the deck's three forms (see [`WallMotionDeck`]).
+/// Free DOFs of an entity and their loads.
+type FreeDofs = ([bool; 6], [Option<(f64, Curve)>; 6]);
+
+/// A wall's motion from any of the deck's three forms (see [`WallMotionDeck`]), and an
+/// entity's free DOFs (`entity`; a wall refuses them).
 fn build_motion(
     m: &WallMotionDeck,
     mf: &str,
     origin: [f64; 3],
     axes: [[f64; 3]; 3],
     inp: &WallInputs,
-) -> Result<RigidMotion> {
+    entity: bool,
+) -> Result<(RigidMotion, FreeDofs)> {
     let mut motion = RigidMotion::fixed(origin, axes);
+    let mut free: FreeDofs = Default::default();
     let curve = |field: &str, name: &Option<String>, kind: MotionKind| -> Result<Curve> {
         match (name, kind) {
             (None, MotionKind::Velocity) => Ok(Curve::constant(1.0)),
@@ -248,7 +281,13 @@ fn build_motion(
     let per_dof = [&m.ux, &m.uy, &m.uz, &m.rx, &m.ry, &m.rz];
     let forms = [
         (one_direction, "translation/axis/angle"),
-        (per_dof.iter().any(|d| d.is_some()), "ux … rz"),
+        (
+            per_dof
+                .iter()
+                .filter_map(|d| d.as_ref())
+                .any(|d| !matches!(d.kind, Some(DofType::Free | DofType::Force))),
+            "ux … rz",
+        ),
         (m.segments.is_some(), "segments"),
     ];
     let given: Vec<&str> = forms.iter().filter(|f| f.0).map(|f| f.1).collect();
@@ -306,7 +345,31 @@ fn build_motion(
             if !d.scale.is_finite() {
                 return Err(err(format!("{mf}.{field}"), "expected a finite number"));
             }
-            let kind = d.kind.unwrap_or(m.kind);
+            let kind = match d.kind {
+                None => m.kind,
+                Some(DofType::Displacement) => MotionKind::Displacement,
+                Some(DofType::Velocity) => MotionKind::Velocity,
+                Some(t @ (DofType::Free | DofType::Force)) => {
+                    let name = DOF_NAMES[i];
+                    if !entity {
+                        return Err(err(
+                            format!("{mf}.{name}.type"),
+                            "a wall's motion is prescribed; a body with free DOFs is a contact entity: declare it under [[entities]]",
+                        ));
+                    }
+                    free.0[i] = true;
+                    if t == DofType::Force {
+                        let c = (inp.curve)(format!("{mf}.{name}.curve"), &d.curve)?;
+                        free.1[i] = Some((d.scale, c));
+                    } else if d.curve.is_some() || d.scale != 1.0 {
+                        return Err(err(
+                            format!("{mf}.{name}"),
+                            "a free DOF takes no `curve` or `scale` (`type = \"force\"` loads it)",
+                        ));
+                    }
+                    continue;
+                }
+            };
             motion.dofs[i] = Some(DofMotion {
                 kind,
                 scale: d.scale,
@@ -322,8 +385,24 @@ fn build_motion(
             ));
         }
         motion.dofs = segments(segs, mf)?;
+        for ((&f, dof), name) in free.0.iter().zip(&mut motion.dofs).zip(DOF_NAMES) {
+            if f && dof.take().is_some() {
+                return Err(err(
+                    format!("{mf}.segments"),
+                    format!("move the free DOF {name}; a DOF is free or prescribed"),
+                ));
+            }
+        }
     }
-    Ok(motion)
+    for ((&f, dof), name) in free.0.iter().zip(&motion.dofs).zip(DOF_NAMES) {
+        if f && dof.is_some() {
+            return Err(err(
+                format!("{mf}.{name}"),
+                "is free but also moved by the translation/axis form; a DOF is free or prescribed",
+            ));
+        }
+    }
+    Ok((motion, free))
 }
 
 /// Per-DOF displacement curves through the segments' cumulative increments.
@@ -381,15 +460,25 @@ fn segments(segs: &[SegmentDeck], mf: &str) -> Result<[Option<DofMotion>; 6]> {
     Ok(dofs)
 }
 
-/// Validate and build every `[[walls]]` entry.
-pub fn build_walls(decks: &[WallDeck], inp: &WallInputs) -> Result<Vec<WallDef>> {
-    super::build::unique_names("walls", decks.iter().map(|d| d.name.as_str()))?;
+/// Validate and build every `[[walls]]` entry, or every `[[entities]]` one (`section`).
+pub fn build_walls(decks: &[WallDeck], inp: &WallInputs, section: &str) -> Result<Vec<WallDef>> {
+    super::build::unique_names(section, decks.iter().map(|d| d.name.as_str()))?;
     let mut out = Vec::new();
     for (i, w) in decks.iter().enumerate() {
-        let f = format!("walls[{i}]");
-        out.push(build_wall(w, &f, inp)?);
+        let f = format!("{section}[{i}]");
+        out.push(build_wall(w, &f, inp, section == "entities")?);
     }
     Ok(out)
+}
+
+/// The size L of an entity's rotation unknowns (Θ = L ψ): the lever arm of its contact.
+fn body_length(shape: &ShapeDef, model_size: f64) -> f64 {
+    match *shape {
+        ShapeDef::Sphere { radius } | ShapeDef::Cylinder { radius, .. } => radius,
+        ShapeDef::FinitePlane { lx, ly } => 0.5 * lx.max(ly),
+        ShapeDef::Prism { size } => 0.5 * size[0].max(size[1]).max(size[2]),
+        ShapeDef::Plane { .. } => 0.5 * model_size,
+    }
 }
 
 fn positive(field: String, v: Option<f64>, what: &str) -> Result<f64> {
@@ -465,7 +554,7 @@ fn shape_def(w: &WallDeck, f: &str) -> Result<ShapeDef> {
     })
 }
 
-fn build_wall(w: &WallDeck, f: &str, inp: &WallInputs) -> Result<WallDef> {
+fn build_wall(w: &WallDeck, f: &str, inp: &WallInputs, entity: bool) -> Result<WallDef> {
     let mut shape = shape_def(w, f)?;
     if w.point.iter().any(|x| !x.is_finite()) {
         return Err(err(format!("{f}.point"), "expected finite numbers"));
@@ -559,9 +648,53 @@ fn build_wall(w: &WallDeck, f: &str, inp: &WallInputs) -> Result<WallDef> {
         .iter()
         .map(|n| area.get(n).copied().unwrap_or(0.0))
         .collect();
-    let motion = match &w.motion {
-        None => RigidMotion::fixed(w.point, [ex, ey, ez]),
-        Some(m) => build_motion(m, &format!("{f}.motion"), w.point, [ex, ey, ez], inp)?,
+    let (motion, (free, loads)) = match &w.motion {
+        None => (
+            RigidMotion::fixed(w.point, [ex, ey, ez]),
+            Default::default(),
+        ),
+        Some(m) => build_motion(
+            m,
+            &format!("{f}.motion"),
+            w.point,
+            [ex, ey, ez],
+            inp,
+            entity,
+        )?,
+    };
+    let trace = match (&w.trace, entity) {
+        (Some(_), false) => return Err(err(
+            format!("{f}.trace"),
+            "traced points belong to contact entities ([[entities]]); a wall's path is its motion",
+        )),
+        (None, _) => Vec::new(),
+        (Some(t), true) => {
+            super::build::unique_names(&format!("{f}.trace"), t.iter().map(|p| p.name.as_str()))?;
+            let mut v = Vec::new();
+            for (k, p) in t.iter().enumerate() {
+                let ok = !p.name.is_empty()
+                    && p.name
+                        .chars()
+                        .all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-');
+                if !ok {
+                    return Err(err(
+                        format!("{f}.trace[{k}].name"),
+                        format!(
+                            "expected letters, digits, `_` or `-` (it names history columns), got {:?}",
+                            p.name
+                        ),
+                    ));
+                }
+                if p.point.iter().any(|x| !x.is_finite()) {
+                    return Err(err(
+                        format!("{f}.trace[{k}].point"),
+                        "expected finite numbers",
+                    ));
+                }
+                v.push((p.name.clone(), p.point));
+            }
+            v
+        }
     };
     // A plane without a display size is drawn as large as the model.
     if let ShapeDef::Plane { display_size } = &mut shape {
@@ -569,6 +702,7 @@ fn build_wall(w: &WallDeck, f: &str, inp: &WallInputs) -> Result<WallDef> {
             *display_size = 2e9 * inp.tol;
         }
     }
+    let length = body_length(&shape, 2e9 * inp.tol);
     let def = WallDef {
         name: w.name.clone(),
         shape,
@@ -585,6 +719,13 @@ fn build_wall(w: &WallDeck, f: &str, inp: &WallInputs) -> Result<WallDef> {
         set,
         nodes,
         areas,
+        body: entity.then_some(BodyDef {
+            free,
+            loads,
+            length,
+            trace,
+            owner: 0,
+        }),
     };
     // No tracked node may start inside the wall: the multiplier/penalty would push it out
     // with a force nobody asked for.
