@@ -54,33 +54,7 @@ pub struct BodyDef {
     pub owner: usize,
 }
 
-type M3 = [[f64; 3]; 3];
-
-pub fn skew(d: [f64; 3]) -> M3 {
-    [[0.0, -d[2], d[1]], [d[2], 0.0, -d[0]], [-d[1], d[0], 0.0]]
-}
-
-fn mul(a: &M3, b: &M3) -> M3 {
-    std::array::from_fn(|i| std::array::from_fn(|j| (0..3).map(|k| a[i][k] * b[k][j]).sum()))
-}
-
-fn add(a: &M3, b: &M3, s: f64) -> M3 {
-    std::array::from_fn(|i| std::array::from_fn(|j| a[i][j] + s * b[i][j]))
-}
-
-fn flat(a: &M3, s: f64) -> [f64; 9] {
-    std::array::from_fn(|k| s * a[k / 3][k % 3])
-}
-
-fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
-
-const ID: M3 = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+use super::mat3::{add, cross, flat, mul, skew, ID, M3};
 
 /// The tangent of the exponential map (SO(3)'s left Jacobian): δ(exp[φ]) exp[φ]ᵀ =
 /// [T(φ) δφ]ₓ, T = I + (1 − cos φ)/φ² [φ]ₓ + (φ − sin φ)/φ³ [φ]ₓ².

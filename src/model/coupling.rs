@@ -45,6 +45,7 @@ use super::contribution::{
 use super::dofs::{DofMap, Unknowns};
 use super::kind::{ContributionKind, Localizer};
 use super::local::{LocalElements, LocalMesh};
+use super::mat3::{flat, mul, skew, transpose, ID};
 use crate::curve::Curve;
 use serde::{Deserialize, Serialize};
 
@@ -125,30 +126,6 @@ pub fn invert3(a: [[f64; 3]; 3]) -> Option<[[f64; 3]; 3]> {
         }
     }
     Some(inv)
-}
-
-fn skew(d: [f64; 3]) -> [[f64; 3]; 3] {
-    [[0.0, -d[2], d[1]], [d[2], 0.0, -d[0]], [-d[1], d[0], 0.0]]
-}
-
-fn mul(a: [[f64; 3]; 3], b: [[f64; 3]; 3]) -> [[f64; 3]; 3] {
-    let mut c = [[0.0; 3]; 3];
-    for i in 0..3 {
-        for j in 0..3 {
-            for k in 0..3 {
-                c[i][j] += a[i][k] * b[k][j];
-            }
-        }
-    }
-    c
-}
-
-fn flat(a: [[f64; 3]; 3], s: f64) -> [f64; 9] {
-    std::array::from_fn(|k| s * a[k / 3][k % 3])
-}
-
-fn transpose(a: [[f64; 3]; 3]) -> [[f64; 3]; 3] {
-    std::array::from_fn(|i| std::array::from_fn(|j| a[j][i]))
 }
 
 const NAMES: [&str; 6] = ["ux", "uy", "uz", "rx", "ry", "rz"];
@@ -254,8 +231,8 @@ impl Coupling {
             ];
             let sd = skew(d);
             let b: [[f64; 3]; 3] =
-                std::array::from_fn(|i| std::array::from_fn(|j| w * mul(def.j_inv, sd)[i][j]));
-            let rb = mul(skew(r), b);
+                std::array::from_fn(|i| std::array::from_fn(|j| w * mul(&def.j_inv, &sd)[i][j]));
+            let rb = mul(&skew(r), &b);
             c_t.push(std::array::from_fn(|i| {
                 std::array::from_fn(|j| if i == j { w / w_total } else { 0.0 } - rb[i][j])
             }));
@@ -388,18 +365,16 @@ impl Contribution for Coupling {
             let [ut, ur, glt, glr] = self.global;
             for (i, &n) in self.def.nodes.iter().enumerate() {
                 let a = ev.dofs.global_block(n);
-                m.add_block(a, glt, &flat(transpose(self.c_t[i]), k));
-                m.add_block(a, glr, &flat(transpose(self.c_r[i]), k));
-                m.add_block(glt, a, &flat(self.c_t[i], k));
-                m.add_block(glr, a, &flat(self.c_r[i], k));
+                m.add_block(a, glt, &flat(&transpose(&self.c_t[i]), k));
+                m.add_block(a, glr, &flat(&transpose(&self.c_r[i]), k));
+                m.add_block(glt, a, &flat(&self.c_t[i], k));
+                m.add_block(glr, a, &flat(&self.c_r[i], k));
             }
             if self.owner {
-                let id: [[f64; 3]; 3] =
-                    std::array::from_fn(|i| std::array::from_fn(|j| (i == j) as u8 as f64));
                 for (u, l) in [(ut, glt), (ur, glr)] {
-                    m.add_block(u, l, &flat(id, -k));
-                    m.add_block(l, u, &flat(id, -k));
-                    m.add_block(l, l, &flat(id, -JACOBIAN_REG * k));
+                    m.add_block(u, l, &flat(&ID, -k));
+                    m.add_block(l, u, &flat(&ID, -k));
+                    m.add_block(l, l, &flat(&ID, -JACOBIAN_REG * k));
                 }
             }
         }

@@ -15,6 +15,7 @@ pub mod dynamics;
 pub mod kind;
 pub mod loads;
 pub mod local;
+pub mod mat3;
 pub mod solids;
 pub mod walls;
 

@@ -21,6 +21,7 @@ use super::contribution::{
 use super::dofs::{DofMap, Unknowns};
 use super::kind::{ContributionKind, Localizer};
 use super::local::{LocalElements, LocalMesh};
+use super::mat3::{cross, flat};
 use crate::contact::law::{alm_law, penalty, AlmLaw, Branch, Decision, Threshold};
 use crate::contact::motion::{Pose, RigidMotion};
 use crate::contact::shape::Shape;
@@ -227,20 +228,6 @@ struct NodeEval {
     normal: Option<[f64; 3]>,
     /// The node's projection on the wall.
     point: Option<[f64; 3]>,
-}
-
-fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
-
-fn flat(a: [[f64; 3]; 3]) -> [f64; 9] {
-    [
-        a[0][0], a[0][1], a[0][2], a[1][0], a[1][1], a[1][2], a[2][0], a[2][1], a[2][2],
-    ]
 }
 
 impl Wall {
@@ -582,12 +569,12 @@ impl Contribution for Wall {
             }
             if let Some(k) = ev.jacobian.as_deref_mut() {
                 let a = ev.dofs.global_block(n);
-                k.add_block(a, a, &flat(e.k_xx));
+                k.add_block(a, a, &flat(&e.k_xx, 1.0));
                 if let Some(m0) = self.mult {
                     let m = ev.dofs.global_block(m0 + j);
-                    k.add_block(a, m, &flat(e.k_xl));
-                    k.add_block(m, a, &flat(e.k_lx));
-                    k.add_block(m, m, &flat(e.k_ll));
+                    k.add_block(a, m, &flat(&e.k_xl, 1.0));
+                    k.add_block(m, a, &flat(&e.k_lx, 1.0));
+                    k.add_block(m, m, &flat(&e.k_ll, 1.0));
                 }
             }
             if let (Some(b), Some(s), Some(xc), Some(nrm)) = (&self.body, &body, e.point, e.normal)
