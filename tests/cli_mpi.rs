@@ -1182,3 +1182,59 @@ fn entity_roll_same_on_one_and_two_ranks() {
         assert!((x - y).abs() < 1e-8, "ball.ry {x} vs {y}");
     }
 }
+
+/// `sphere-roll` (paper §3.5) on 1 and 2 ranks, with the contact zone split between
+/// them (METIS cuts the block through its centre): the same displacements at every
+/// step, the same pole trace; it finishes, never penetrates, and the sphere rolls (its
+/// pole runs ahead of its centre, while the moment about the centre stays at solver
+/// tolerance: its rotations are free).
+#[test]
+fn sphere_roll_same_on_one_and_two_ranks() {
+    let dir = temp_dir("rank-sphere-roll");
+    ok(alfe(
+        &dir,
+        1,
+        &["run", "sphere-roll", "--out", "r1", "--quiet"],
+    ));
+    ok(alfe(
+        &dir,
+        2,
+        &[
+            "run",
+            "sphere-roll",
+            "--out",
+            "r2",
+            "--partitions",
+            "parts",
+            "--quiet",
+        ],
+    ));
+    let (a, b) = (dir.join("r1"), dir.join("r2"));
+    assert_same_runs_counts(&a, &b, "sphere-roll", false);
+    let (ha, hb) = (
+        history(&a.join("history.csv")),
+        history(&b.join("history.csv")),
+    );
+    let col = |h: &Vec<Vec<String>>, name: &str| -> Vec<f64> {
+        let i = h[0].iter().position(|c| c == name).unwrap();
+        h[1..].iter().map(|r| r[i].parse().unwrap()).collect()
+    };
+    for name in ["sphere.pole.x", "sphere.pole.y", "sphere.pole.z", "sphere.rz"] {
+        for (x, y) in col(&ha, name).iter().zip(&col(&hb, name)) {
+            assert!((x - y).abs() < 1e-6, "{name}: {x} vs {y}");
+        }
+    }
+    for h in [&ha, &hb] {
+        assert_eq!(*col(h, "time").last().unwrap(), 2.0);
+        let pen = col(h, "max_penetration");
+        assert!(pen.iter().all(|&p| p < 1e-8), "penetration {pen:?}");
+        let (fz, r) = (col(h, "sphere.fz"), 50.0);
+        for m in ["sphere.mx", "sphere.my", "sphere.mz"] {
+            for (mi, f) in col(h, m).iter().zip(&fz) {
+                assert!(mi.abs() < 1e-6 * f * r, "{m} = {mi} at F = {f}");
+            }
+        }
+        let ahead = col(h, "sphere.pole.x").last().unwrap() - col(h, "sphere.ux").last().unwrap();
+        assert!(ahead > 25.0, "the pole ran {ahead} mm ahead of the centre");
+    }
+}

@@ -2,7 +2,8 @@
 //! prescribed or free. The generalized Jacobian with the body coupling against finite
 //! differences; an entity with every DOF prescribed against the same rigid wall
 //! (hertz-sphere); a free sphere that rolls and a locked one that slides at μN; deck
-//! mistakes. The 1 vs 2 rank comparison of `sphere-roll` is in `cli_mpi.rs`.
+//! mistakes; Cattaneo–Mindlin partial slip under a tangential force on a free DOF. The
+//! 1 vs 2 rank comparison of `sphere-roll` is in `cli_mpi.rs`.
 
 mod common;
 use common::*;
@@ -189,6 +190,91 @@ fn a_free_sphere_rolls_and_a_locked_one_slides_at_mu_n() {
     assert!(column(&slide, "ball.ry").iter().all(|&r| r == 0.0));
     assert!(column(&slide, "max_penetration").iter().all(|&p| p < 1e-10));
 }
+
+/// Cattaneo–Mindlin (Johnson, Contact Mechanics §7.1): a rigid sphere (R = 50) pressed
+/// 0.5 mm into a nearly incompressible block (ν = 0.49, so the normal and tangential
+/// problems decouple, as Mindlin's solution assumes), then pushed sideways by a force
+/// Q < μP on its free `ux` (rotations locked). The stick zone is a disc of radius
+/// c = a (1 − Q/μP)^{1/3}, and the traction q(r) = μ p₀/a (√(a² − r²) − √(c² − r²))
+/// inside it, so at the centre q/(μ p) = 1 − c/a: the centre node's tangential over μ
+/// times its normal force gives c/a without counting stick nodes on a mesh. Measured
+/// (half model, 32 × 12 × 10 cells, graded to the contact): c/a within 3.5 % of Mindlin
+/// at Q/μP = 0.71 (and within 2.5 % at 0.18–0.53 and on a 40 × 16 × 12 mesh).
+#[test]
+fn cattaneo_mindlin_stick_zone() {
+    let out = run_deck("mindlin", MINDLIN);
+    let (fx, fz) = (column(&out, "ball.fx"), column(&out, "ball.fz"));
+    let (q, p) = (-fx.last().unwrap(), *fz.last().unwrap());
+    assert!((q - 60.0).abs() < 1e-6, "the free ux carries the load: {q}");
+    let ratio = q / (0.3 * p);
+    assert!((0.6..0.8).contains(&ratio), "Q/μP = {ratio}");
+    let mesh = &out.model.mesh;
+    let centre = (0..mesh.n_owned())
+        .find(|&i| mesh.coords[i].iter().all(|x| x.abs() < 1e-9))
+        .unwrap();
+    let f = field(&out, "contact_force");
+    let c = &f[3 * centre..3 * centre + 3];
+    let c_over_a = 1.0 - c[0].abs() / (0.3 * c[2].abs());
+    let mindlin = (1.0 - ratio).cbrt();
+    eprintln!("Q/μP = {ratio}: c/a = {c_over_a}, Mindlin {mindlin}");
+    assert!(
+        rel_err(c_over_a, mindlin) < 0.05,
+        "c/a = {c_over_a} against Mindlin's {mindlin}"
+    );
+    assert!(column(&out, "ball.ux").last().unwrap() > &0.0);
+    assert!(column(&out, "max_penetration").iter().all(|&g| g < 1e-10));
+}
+
+const MINDLIN: &str = r#"
+[scene]
+name = "mindlin"
+units = "mm-t-s"
+[[materials]]
+name = "m"
+model = "neo-hookean"
+E = 100.0
+nu = 0.49
+[[parts]]
+name = "block"
+material = "m"
+mesh = { kind = "box", origin = [-20, 0, -20], size = [40, 20, 20], cells = [32, 12, 10], grading = [1, 10, 0.1] }
+[[node_sets]]
+name = "y0"
+group = "ymin"
+[[node_sets]]
+name = "base"
+group = "zmin"
+[[node_sets]]
+name = "top"
+group = "zmax"
+[[boundary]]
+type = "fixed"
+set = "y0"
+components = ["y"]
+[[boundary]]
+type = "fixed"
+set = "base"
+[[curves]]
+name = "press"
+points = [[0, 0], [1, 1], [2, 1]]
+[[curves]]
+name = "shear"
+points = [[0, 0], [1, 0], [2, 1]]
+[[entities]]
+name = "ball"
+shape = "sphere"
+radius = 50.0
+point = [0, 0, 50]
+nodes = "top"
+friction = 0.3
+[entities.motion]
+uz = { curve = "press", scale = -0.5 }
+ux = { type = "force", curve = "shear", scale = 60.0 }
+[analysis]
+type = "static"
+end_time = 2.0
+step = 0.25
+"#;
 
 /// Deck mistakes about entities name the field.
 #[test]

@@ -123,6 +123,11 @@ pub const BUILTIN: &[(&str, &str, &str)] = &[
         "rigid sphere R = 50 mm pressed 1 mm into an elastic block, frictionless (Hertz)",
         include_str!("scenes/hertz-sphere.toml"),
     ),
+    (
+        "sphere-roll",
+        "rigid sphere entity pressed 40 mm into a rubber block, then dragged along a spiral: it rolls, mu = 0.45 (paper 3.5)",
+        include_str!("scenes/sphere-roll.toml"),
+    ),
 ];
 
 /// The scene `alfe` and `alfe run` use when none is named.
