@@ -1219,7 +1219,12 @@ fn sphere_roll_same_on_one_and_two_ranks() {
         let i = h[0].iter().position(|c| c == name).unwrap();
         h[1..].iter().map(|r| r[i].parse().unwrap()).collect()
     };
-    for name in ["sphere.pole.x", "sphere.pole.y", "sphere.pole.z", "sphere.rz"] {
+    for name in [
+        "sphere.pole.x",
+        "sphere.pole.y",
+        "sphere.pole.z",
+        "sphere.rz",
+    ] {
         for (x, y) in col(&ha, name).iter().zip(&col(&hb, name)) {
             assert!((x - y).abs() < 1e-6, "{name}: {x} vs {y}");
         }

@@ -33,6 +33,7 @@
 //! means the block is singular to working precision and is reported as an `Err`.
 //! Factorization is local: callers agree on failure across ranks with `Comm::all_ok`.
 
+use super::border::Border;
 use super::condense::Condensation;
 use super::nd_lu::NdLu;
 use super::ordering::{self, Graph};
@@ -129,6 +130,10 @@ pub struct LocalFactor {
     n_full: usize,
     /// Attached blocks eliminated before factoring, if any.
     cond: Option<Box<Condensation>>,
+    /// Size after the condensation, before the border is set aside.
+    n_mid: usize,
+    /// Dense block rows set aside and solved as a border, if any.
+    border: Option<Box<Border>>,
     /// Length of the value array the pattern indexes.
     vals_len: usize,
     choice: Factorization,
@@ -275,6 +280,9 @@ impl LocalFactor {
             None
         };
         let pat = cond.as_ref().map_or(pat, |c| c.reduced());
+        let n_mid = 3 * pat.n_nodes;
+        let border = Border::find(pat).map(Box::new);
+        let pat = border.as_ref().map_or(pat, |b| b.inner());
         let (choice, ordering) = (opts.factorization, opts.ordering);
         let n_nodes = pat.n_nodes;
         let n = 3 * n_nodes;
@@ -326,6 +334,8 @@ impl LocalFactor {
             n,
             n_full,
             cond,
+            n_mid,
+            border,
             vals_len: vals.len(),
             choice,
             ordering,
@@ -373,9 +383,11 @@ impl LocalFactor {
             self.last_factor_seconds = 0.0;
             return Ok(());
         }
-        let vals = self.cond.as_deref().map_or(vals, |c| c.values());
-        for (v, &s) in self.csc_vals.iter_mut().zip(&self.src) {
-            *v = vals[s];
+        {
+            let reduced = self.cond.as_deref().map_or(vals, |c| c.values());
+            for (v, &s) in self.csc_vals.iter_mut().zip(&self.src) {
+                *v = reduced[s];
+            }
         }
         let try_cholesky = match self.choice {
             Factorization::Lu => false,
@@ -403,6 +415,18 @@ impl LocalFactor {
             self.factor_lu()?;
         }
         self.check_nonsingular()?;
+        if let Some(mut b) = self.border.take() {
+            let reduced = self.cond.as_deref().map_or(vals, |c| c.values());
+            let res = b.factor(reduced, |z| self.solve_factored(z));
+            self.border = Some(b);
+            if let Err(e) = res {
+                self.factor = Factor::None;
+                return Err(Error::runtime(format!(
+                    "{}: the local {}×{} block: {e}",
+                    self.label, self.n_mid, self.n_mid
+                )));
+            }
+        }
         self.factorizations += 1;
         self.last_factor_seconds = t.elapsed().as_secs_f64();
         Ok(())
@@ -562,16 +586,25 @@ impl LocalFactor {
     /// z ← A⁻¹ z (length [`Self::n_full`]); no-op before a successful factorization.
     pub fn solve_in_place(&self, z: &mut [f64]) {
         match self.cond.as_deref() {
-            None => self.solve_factored(z),
+            None => self.solve_reduced(z),
             Some(c) => {
                 if matches!(self.factor, Factor::None) && self.n > 0 {
                     return;
                 }
-                let mut x = Vec::with_capacity(self.n);
+                let mut x = Vec::with_capacity(self.n_mid);
                 c.rhs(z, &mut x);
-                self.solve_factored(&mut x);
+                self.solve_reduced(&mut x);
                 c.recover(&x, z);
             }
+        }
+    }
+
+    /// x ← M⁻¹ x for the condensed matrix M (length `n_mid`): the factored matrix, or
+    /// the factored interior and the border ([`super::border`]).
+    fn solve_reduced(&self, x: &mut [f64]) {
+        match self.border.as_deref() {
+            None => self.solve_factored(x),
+            Some(b) => b.solve(x, |y| self.solve_factored(y)),
         }
     }
 
@@ -648,6 +681,10 @@ impl LocalFactor {
     /// Size of the block (scalar dofs, before condensation).
     pub fn n_full(&self) -> usize {
         self.n_full
+    }
+    /// Dense block rows set aside as a border ([`super::border`]).
+    pub fn border_blocks(&self) -> usize {
+        self.border.as_ref().map_or(0, |b| b.n_border())
     }
     /// Block rows eliminated by the condensation ([`super::condense`]).
     pub fn condensed_blocks(&self) -> usize {
@@ -1043,6 +1080,59 @@ pub(crate) mod tests {
         m.add_block(27, 27, &[1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0]);
         m.finish_assembly(&SerialComm);
         assert_eq!(BlockJacobi::new(&m).unwrap().condensed_blocks(), 0);
+    }
+
+    /// A block row coupled to every node (a rigid body's DOFs) is set aside as a border
+    /// and the system still solved exactly, also when the border rows are not the
+    /// transpose of its columns (the interior keeps its Cholesky factor).
+    #[test]
+    fn dense_rows_are_solved_as_a_border() {
+        let base = elasticity_cube(&SerialComm, 5, &[216]);
+        for non_symmetric in [false, true] {
+            let mut pairs: Vec<(usize, usize)> = (0..216)
+                .flat_map(|i| base.cols_of_row(i).iter().map(move |&k| (i, k)))
+                .collect();
+            pairs.push((216, 216));
+            for i in 0..216 {
+                pairs.extend_from_slice(&[(216, i), (i, 216)]);
+            }
+            let mut m = DistMatrix::new(&SerialComm, Layout::from_counts(&[217], 0), &pairs);
+            for i in 0..216 {
+                for (q, &k) in base.cols_of_row(i).iter().enumerate() {
+                    let e = base.row_ptr[i] + q;
+                    let v: [f64; 9] = std::array::from_fn(|c| base.vals[9 * e + c]);
+                    m.add_block(i, k, &v);
+                }
+            }
+            // A soft spring from every node to the hub: SPD; skewed when asked.
+            let k = 0.01 * base.block(0, 0).unwrap()[0];
+            let mut rng = Lcg(3);
+            for i in 0..216 {
+                let c: [f64; 9] = std::array::from_fn(|q| if q % 4 == 0 { -k } else { 0.0 });
+                let d = c.map(|v| -v);
+                m.add_block(i, 216, &c);
+                if non_symmetric {
+                    let skew: [f64; 9] = std::array::from_fn(|_| 0.3 * k * rng.next());
+                    m.add_block(216, i, &skew);
+                } else {
+                    m.add_block(216, i, &c);
+                }
+                m.add_block(i, i, &d);
+                m.add_block(216, 216, &d);
+            }
+            m.finish_assembly(&SerialComm);
+            let bj = BlockJacobi::new(&m).unwrap();
+            assert_eq!(bj.border_blocks(), 1);
+            assert_eq!(bj.n(), 3 * 216);
+            // The interior is the cube's SPD stiffness either way: only the border is
+            // non-symmetric, and it is solved apart.
+            assert_eq!(bj.kind(), Factorization::Cholesky);
+            let r: Vec<f64> = (0..3 * 217).map(|i| (i as f64 * 0.17).cos()).collect();
+            let mut z = vec![0.0; r.len()];
+            bj.apply(&SerialComm, &r, &mut z);
+            let res = residual(&m, &z, &r);
+            assert!(res < 1e-10, "non-symmetric {non_symmetric}: {res:e}");
+        }
     }
 
     /// A multiplier block coupled to two nodes that are coupled to each other (a node

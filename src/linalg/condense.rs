@@ -311,7 +311,8 @@ impl Condensation {
             for xi in p.nb.clone() {
                 let (bd, x) = (&self.bdinv[xi], self.nbrs[xi].x_red);
                 for i in 0..3 {
-                    out[3 * x + i] -= bd[3 * i] * g[0] + bd[3 * i + 1] * g[1] + bd[3 * i + 2] * g[2];
+                    out[3 * x + i] -=
+                        bd[3 * i] * g[0] + bd[3 * i + 1] * g[1] + bd[3 * i + 2] * g[2];
                 }
             }
         }

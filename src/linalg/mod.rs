@@ -11,6 +11,7 @@
 pub mod amg;
 pub mod asm;
 pub mod block_jacobi;
+pub mod border;
 pub mod condense;
 pub mod gmres;
 mod hypre;

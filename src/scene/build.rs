@@ -656,6 +656,29 @@ pub fn amg_unsuited(deck: &Deck) -> Option<String> {
     None
 }
 
+/// The times where a load curve or a wall motion's segment changes slope, inside the
+/// run (`Analysis::stops`).
+fn curve_breakpoints(deck: &Deck) -> Vec<f64> {
+    let end = deck.analysis.end_time;
+    let segments = deck
+        .walls
+        .iter()
+        .chain(&deck.entities)
+        .filter_map(|w| w.motion.as_ref()?.segments.as_ref())
+        .flatten()
+        .map(|s| s.to);
+    let mut t: Vec<f64> = deck
+        .curves
+        .iter()
+        .flat_map(|c| c.points.iter().map(|p| p[0]))
+        .chain(segments)
+        .filter(|&t| t > 0.0 && t < end && t.is_finite())
+        .collect();
+    t.sort_by(f64::total_cmp);
+    t.dedup();
+    t
+}
+
 fn run_settings(deck: &Deck) -> RunSettings {
     let a = &deck.analysis;
     let s = &deck.solver;
@@ -675,6 +698,11 @@ fn run_settings(deck: &Deck) -> RunSettings {
                 .dt_factor
                 .unwrap_or(crate::solve::time::explicit::DEFAULT_DT_FACTOR),
             predictor: a.predictor.unwrap_or_default(),
+            stops: if a.kind == AnalysisKind::Static {
+                curve_breakpoints(deck)
+            } else {
+                Vec::new()
+            },
         },
         solver: NonlinearOptions {
             kind: s.nonlinear,

@@ -128,6 +128,11 @@ pub const BUILTIN: &[(&str, &str, &str)] = &[
         "rigid sphere entity pressed 40 mm into a rubber block, then dragged along a spiral: it rolls, mu = 0.45 (paper 3.5)",
         include_str!("scenes/sphere-roll.toml"),
     ),
+    (
+        "panel-dent",
+        "rigid sphere entity pushed 50 mm into a curved elastic-plastic steel panel and back (paper 3.6)",
+        include_str!("scenes/panel-dent.toml"),
+    ),
 ];
 
 /// The scene `alfe` and `alfe run` use when none is named.

@@ -85,6 +85,10 @@ pub struct Analysis {
     pub dt_factor: f64,
     /// Static: the first iterate of a step.
     pub predictor: Predictor,
+    /// Static: times a step must end on (the load curves' breakpoints), so a peak or a
+    /// reversal of the loading is reached exactly and not stepped over.
+    #[serde(default)]
+    pub stops: Vec<f64>,
 }
 
 impl Analysis {

@@ -14,6 +14,8 @@ pub struct StepControl {
     pub growth: f64,
     pub easy_iterations: usize,
     end: f64,
+    /// Times a step must end on, ascending (`Analysis::stops`).
+    stops: Vec<f64>,
     /// The end of the last converged step.
     t_done: f64,
     /// The step the next attempt tries.
@@ -34,6 +36,7 @@ impl StepControl {
             growth: 1.5,
             easy_iterations: (max_iterations / 4).max(3),
             end: a.end_time,
+            stops: a.stops.clone(),
             t_done: 0.0,
             dt: a.step.min(a.max_step),
             steps: 0,
@@ -50,6 +53,13 @@ impl StepControl {
         if t > self.end * (1.0 - 1e-9) || self.end - t < 1e-3 * self.dt {
             t = self.end;
         }
+        // The next stop after this step's start, if the step would reach or pass it.
+        let eps = 1e-9 * self.end.abs().max(1.0);
+        if let Some(&s) = self.stops.iter().find(|&&s| s > self.t_done + eps) {
+            if t > s - 1e-3 * self.dt {
+                t = s;
+            }
+        }
         Some((self.t_done, t))
     }
 
@@ -61,7 +71,7 @@ impl StepControl {
         self.dt = 0.5 * tried;
         if self.dt < self.min_step {
             return Err(format!(
-                "step {} (t = {t1}) did not converge: {reason}; the {what} was cut {} time(s) to {tried:.3e}, the minimum is {:.3e}",
+                "step {} (t = {t1}) did not converge: {reason}; the {what} was {tried:.3e} after {} retry(ies) of this {what}, and halving it would pass the minimum {:.3e}",
                 self.steps + 1,
                 self.retries,
                 self.min_step
@@ -110,6 +120,7 @@ mod tests {
             mass: MassKind::Consistent,
             dt_factor: 0.9,
             predictor: crate::solve::Predictor::Linear,
+            stops: Vec::new(),
         }
     }
 
@@ -159,5 +170,35 @@ mod tests {
         }
         assert_eq!(times.len(), 4);
         assert_eq!(*times.last().unwrap(), 1.0);
+    }
+
+    /// Steps end on the stops (a load reversal at t = 0.5 is reached exactly), also after
+    /// a cut and regrowth that would step over it, and leave no sliver before one.
+    #[test]
+    fn steps_land_on_the_stops() {
+        let mut a = analysis(0.3, 0.01, 0.3);
+        a.stops = vec![0.5, 0.7];
+        let mut c = StepControl::new(&a, 20);
+        let mut times = Vec::new();
+        while let Some((_, t1)) = c.next() {
+            times.push(t1);
+            c.accept(t1, 10);
+        }
+        assert_eq!(times, vec![0.3, 0.5, 0.7, 1.0]);
+        // After a cut to 0.15 (0.15, 0.3) the step grows to 0.225: from 0.3 it would
+        // pass 0.5; it stops on 0.5 instead.
+        let mut c = StepControl::new(&a, 20);
+        c.reject(0.3, "x", "step").unwrap();
+        let (_, t) = c.next().unwrap();
+        c.accept(t, 2);
+        let (_, t) = c.next().unwrap();
+        assert!((t - 0.3).abs() < 1e-15);
+        c.accept(t, 2);
+        assert_eq!(c.next().unwrap().1, 0.5);
+        // Within 1e-3 of a step of a stop the step takes it (no sliver).
+        let mut a = analysis(0.4999, 0.01, 0.4999);
+        a.stops = vec![0.5];
+        let c = StepControl::new(&a, 20);
+        assert_eq!(c.next().unwrap().1, 0.5);
     }
 }
