@@ -135,6 +135,12 @@ fn assert_same_runs(a: &Path, b: &Path, scene: &str) {
 /// linear solves are exact on 1 rank and GMRES-inexact on 2 can take one iteration more
 /// or less where a stick/slip decision is near its threshold); results must not.
 fn assert_same_runs_counts(a: &Path, b: &Path, scene: &str, same_counts: bool) {
+    assert_same_runs_within(a, b, scene, same_counts, 1e-8);
+}
+
+/// [`assert_same_runs_counts`] with displacements and forces within `rtol` of their
+/// scale.
+fn assert_same_runs_within(a: &Path, b: &Path, scene: &str, same_counts: bool, rtol: f64) {
     let ua = read_u(&a.join(format!("{scene}.h5")));
     let ub = read_u(&b.join(format!("{scene}.h5")));
     let (oa, ob) = (ua.as_object().unwrap(), ub.as_object().unwrap());
@@ -164,7 +170,7 @@ fn assert_same_runs_counts(a: &Path, b: &Path, scene: &str, same_counts: bool) {
             .fold(0.0, f64::max);
         assert!(
             // Dynamic runs write their initial (undeformed) state as step 0.
-            (scale > 0.0 || k == "000000") && diff <= 1e-8 * scale,
+            (scale > 0.0 || k == "000000") && diff <= rtol * scale,
             "step {k}: displacements differ by {diff:e} (max |u| {scale:e})"
         );
     }
@@ -206,7 +212,7 @@ fn assert_same_runs_counts(a: &Path, b: &Path, scene: &str, same_counts: bool) {
         let fb: Vec<f64> = rb.iter().map(|s| s.parse().unwrap()).collect();
         let scale = fa.iter().map(|x| x.abs()).fold(1e-300, f64::max);
         for (x, y) in fa.iter().zip(&fb) {
-            assert!((x - y).abs() <= 1e-8 * scale.max(1.0), "{name}: {x} vs {y}");
+            assert!((x - y).abs() <= rtol * scale.max(1.0), "{name}: {x} vs {y}");
         }
     }
 }
@@ -1210,7 +1216,10 @@ fn sphere_roll_same_on_one_and_two_ranks() {
         ],
     ));
     let (a, b) = (dir.join("r1"), dir.join("r2"));
-    assert_same_runs_counts(&a, &b, "sphere-roll", false);
+    // Within 1e-6, not 1e-8: each run converges to |r| ≤ 1e-8 f_ref, and where the
+    // rolling sphere's contact changes state the two take different iterates to it
+    // (measured 3e-8 of the largest force).
+    assert_same_runs_within(&a, &b, "sphere-roll", false, 1e-6);
     let (ha, hb) = (
         history(&a.join("history.csv")),
         history(&b.join("history.csv")),

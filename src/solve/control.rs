@@ -71,7 +71,7 @@ impl StepControl {
         self.dt = 0.5 * tried;
         if self.dt < self.min_step {
             return Err(format!(
-                "step {} (t = {t1}) did not converge: {reason}; the {what} was {tried:.3e} after {} retry(ies) of this {what}, and halving it would pass the minimum {:.3e}",
+                "step {} (t = {t1}) did not converge: {reason}; the {what} was {tried:.3e} after {} retry(ies) of this {what}, and the minimum is {:.3e}",
                 self.steps + 1,
                 self.retries,
                 self.min_step
