@@ -928,20 +928,15 @@ pub(crate) mod tests {
 
     type Mat3 = [[f64; 3]; 3];
 
-    /// `base` (one rank, SPD) with three multipliers attached to each of `nodes`, as an
-    /// ALM wall assembles them (walls.rs): in the frame P of a tilted normal, the
-    /// law's ∂h/∂g = `hg` and ∂h/∂λ = `hl` give B = −κ P (I − hl), C = −κ hg Pᵀ and
-    /// D = −κ (hl + 10⁻⁸ I). `kinds[j % kinds.len()]` picks each node's (hg, hl).
-    fn with_multipliers(base: &DistMatrix, nodes: &[usize], kinds: &[(Mat3, Mat3)]) -> DistMatrix {
+    /// `base` (one rank) grown by `extra` block rows with the extra `pairs` in its
+    /// pattern, `base`'s blocks copied in; assembly not finished.
+    fn extended(base: &DistMatrix, extra: usize, pairs: &[(usize, usize)]) -> DistMatrix {
         let n0 = base.layout().owned_len();
-        let n = n0 + nodes.len();
-        let mut pairs: Vec<(usize, usize)> = (0..n0)
+        let mut all: Vec<(usize, usize)> = (0..n0)
             .flat_map(|i| base.cols_of_row(i).iter().map(move |&k| (i, k)))
             .collect();
-        for (j, &a) in nodes.iter().enumerate() {
-            pairs.extend_from_slice(&[(a, n0 + j), (n0 + j, a), (n0 + j, n0 + j)]);
-        }
-        let mut m = DistMatrix::new(&SerialComm, Layout::from_counts(&[n], 0), &pairs);
+        all.extend_from_slice(pairs);
+        let mut m = DistMatrix::new(&SerialComm, Layout::from_counts(&[n0 + extra], 0), &all);
         for i in 0..n0 {
             for (q, &k) in base.cols_of_row(i).iter().enumerate() {
                 let e = base.row_ptr[i] + q;
@@ -949,6 +944,21 @@ pub(crate) mod tests {
                 m.add_block(i, k, &v);
             }
         }
+        m
+    }
+
+    /// `base` (one rank, SPD) with three multipliers attached to each of `nodes`, as an
+    /// ALM wall assembles them (walls.rs): in the frame P of a tilted normal, the
+    /// law's ∂h/∂g = `hg` and ∂h/∂λ = `hl` give B = −κ P (I − hl), C = −κ hg Pᵀ and
+    /// D = −κ (hl + 10⁻⁸ I). `kinds[j % kinds.len()]` picks each node's (hg, hl).
+    fn with_multipliers(base: &DistMatrix, nodes: &[usize], kinds: &[(Mat3, Mat3)]) -> DistMatrix {
+        let n0 = base.layout().owned_len();
+        let pairs: Vec<(usize, usize)> = nodes
+            .iter()
+            .enumerate()
+            .flat_map(|(j, &a)| [(a, n0 + j), (n0 + j, a), (n0 + j, n0 + j)])
+            .collect();
+        let mut m = extended(base, nodes.len(), &pairs);
         let kappa = 7.0 * (0..n0).map(|i| base.block(i, i).unwrap()[0]).sum::<f64>() / n0 as f64;
         let (c, s) = (0.8f64, 0.6f64);
         // Columns: normal, t1, t2.
@@ -1065,18 +1075,8 @@ pub(crate) mod tests {
         );
         // A multiplier block coupled to two nodes (as a rigid body's DOFs would be).
         let base = elasticity_cube(&SerialComm, 2, &[27]);
-        let mut pairs: Vec<(usize, usize)> = (0..27)
-            .flat_map(|i| base.cols_of_row(i).iter().map(move |&k| (i, k)))
-            .collect();
-        pairs.extend_from_slice(&[(27, 27), (27, 3), (3, 27), (27, 5), (5, 27)]);
-        let mut m = DistMatrix::new(&SerialComm, Layout::from_counts(&[28], 0), &pairs);
-        for i in 0..27 {
-            for (q, &k) in base.cols_of_row(i).iter().enumerate() {
-                let e = base.row_ptr[i] + q;
-                let v: [f64; 9] = std::array::from_fn(|c| base.vals[9 * e + c]);
-                m.add_block(i, k, &v);
-            }
-        }
+        let pairs = [(27, 27), (27, 3), (3, 27), (27, 5), (5, 27)];
+        let mut m = extended(&base, 1, &pairs);
         m.add_block(27, 27, &[1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0]);
         m.finish_assembly(&SerialComm);
         assert_eq!(BlockJacobi::new(&m).unwrap().condensed_blocks(), 0);
@@ -1089,21 +1089,10 @@ pub(crate) mod tests {
     fn dense_rows_are_solved_as_a_border() {
         let base = elasticity_cube(&SerialComm, 5, &[216]);
         for non_symmetric in [false, true] {
-            let mut pairs: Vec<(usize, usize)> = (0..216)
-                .flat_map(|i| base.cols_of_row(i).iter().map(move |&k| (i, k)))
+            let pairs: Vec<(usize, usize)> = std::iter::once((216, 216))
+                .chain((0..216).flat_map(|i| [(216, i), (i, 216)]))
                 .collect();
-            pairs.push((216, 216));
-            for i in 0..216 {
-                pairs.extend_from_slice(&[(216, i), (i, 216)]);
-            }
-            let mut m = DistMatrix::new(&SerialComm, Layout::from_counts(&[217], 0), &pairs);
-            for i in 0..216 {
-                for (q, &k) in base.cols_of_row(i).iter().enumerate() {
-                    let e = base.row_ptr[i] + q;
-                    let v: [f64; 9] = std::array::from_fn(|c| base.vals[9 * e + c]);
-                    m.add_block(i, k, &v);
-                }
-            }
+            let mut m = extended(&base, 1, &pairs);
             // A soft spring from every node to the hub: SPD; skewed when asked.
             let k = 0.01 * base.block(0, 0).unwrap()[0];
             let mut rng = Lcg(3);
@@ -1141,19 +1130,9 @@ pub(crate) mod tests {
     #[test]
     fn rows_coupled_to_coupled_nodes_are_condensed_exactly() {
         let base = elasticity_cube(&SerialComm, 2, &[27]);
-        let mut pairs: Vec<(usize, usize)> = (0..27)
-            .flat_map(|i| base.cols_of_row(i).iter().map(move |&k| (i, k)))
-            .collect();
         assert!(base.cols_of_row(3).contains(&4));
-        pairs.extend_from_slice(&[(27, 27), (27, 3), (3, 27), (27, 4), (4, 27)]);
-        let mut m = DistMatrix::new(&SerialComm, Layout::from_counts(&[28], 0), &pairs);
-        for i in 0..27 {
-            for (q, &k) in base.cols_of_row(i).iter().enumerate() {
-                let e = base.row_ptr[i] + q;
-                let v: [f64; 9] = std::array::from_fn(|c| base.vals[9 * e + c]);
-                m.add_block(i, k, &v);
-            }
-        }
+        let pairs = [(27, 27), (27, 3), (3, 27), (27, 4), (4, 27)];
+        let mut m = extended(&base, 1, &pairs);
         let mut rng = Lcg(5);
         let k = base.block(3, 3).unwrap()[0];
         for (i, j) in [(27, 3), (3, 27), (27, 4), (4, 27)] {

@@ -164,7 +164,7 @@ impl Border {
     /// x ← K⁻¹ x (3 per node of the full pattern), the interior solved by `solve_inner`.
     pub fn solve(&self, x: &mut [f64], mut solve_inner: impl FnMut(&mut [f64])) {
         let Some(lu) = &self.s_lu else { return };
-        let (ni, nb) = (3 * self.interior.len(), 3 * self.border.len());
+        let ni = 3 * self.interior.len();
         let gather = |nodes: &[usize]| -> Vec<f64> {
             nodes
                 .iter()
@@ -181,7 +181,7 @@ impl Border {
             }
         }
         let Some(xb) = lu.solve(&t) else { return };
-        for (col, wc) in self.w.chunks(ni).enumerate().take(nb) {
+        for (col, wc) in self.w.chunks(ni).enumerate() {
             let v = xb[col];
             for (yi, wi) in y.iter_mut().zip(wc) {
                 *yi -= wi * v;
