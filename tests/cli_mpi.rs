@@ -1251,4 +1251,43 @@ fn sphere_roll_same_on_one_and_two_ranks() {
         let ahead = col(h, "sphere.pole.x").last().unwrap() - col(h, "sphere.ux").last().unwrap();
         assert!(ahead > 25.0, "the pole ran {ahead} mm ahead of the centre");
     }
+    // The pole's path as a polyline in the output: at the last output step, one point
+    // per output step (the history's pole at that step's time) and segments joining
+    // consecutive ones.
+    let script = r#"
+import h5py, json, sys
+f = h5py.File(sys.argv[1], "r")
+steps = sorted(f["steps"].keys())
+g = f["steps"][steps[-1]]["entities"]["sphere_trace"]["path"]
+print(json.dumps({"times": [float(f["steps"][s].attrs["time"]) for s in steps],
+                  "points": g["points"][()].tolist(), "segments": g["segments"][()].tolist()}))
+"#;
+    let j: serde_json::Value = serde_json::from_str(&python(
+        script,
+        &[b.join("sphere-roll.h5").to_str().unwrap()],
+    ))
+    .unwrap();
+    let times: Vec<f64> = serde_json::from_value(j["times"].clone()).unwrap();
+    let points: Vec<[f64; 3]> = serde_json::from_value(j["points"].clone()).unwrap();
+    let segments: Vec<[usize; 2]> = serde_json::from_value(j["segments"].clone()).unwrap();
+    assert!(times.len() > 10, "{} output steps", times.len());
+    assert_eq!(points.len(), times.len());
+    let expect: Vec<[usize; 2]> = (0..times.len() - 1).map(|s| [s, s + 1]).collect();
+    assert_eq!(segments, expect);
+    let (t, px, py, pz) = (
+        col(&hb, "time"),
+        col(&hb, "sphere.pole.x"),
+        col(&hb, "sphere.pole.y"),
+        col(&hb, "sphere.pole.z"),
+    );
+    for (ts, p) in times.iter().zip(&points) {
+        let r = t.iter().position(|x| (x - ts).abs() < 1e-12).unwrap();
+        let want = [px[r], py[r], pz[r]];
+        for c in 0..3 {
+            assert!(
+                (p[c] - want[c]).abs() < 1e-9,
+                "path at t = {ts}: {p:?} vs {want:?}"
+            );
+        }
+    }
 }

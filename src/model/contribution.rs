@@ -184,6 +184,9 @@ pub struct GridSpec {
     pub attrs: Vec<(String, String)>,
     pub cells: Vec<Vec<usize>>,
     pub n_points: usize,
+    /// Also draw each point's path through the output steps so far, as a polyline
+    /// grid `<label>_path` (a traced body-fixed point, paper §3.5).
+    pub paths: bool,
 }
 
 /// A summary entry: `summary.json[group][name] = value`.

@@ -446,6 +446,7 @@ impl Contribution for Coupling {
             attrs: vec![("name".into(), self.def.name.clone())],
             cells: vec![vec![0]],
             n_points: 1,
+            paths: false,
         }]
     }
     fn grid_points(&self, _i: usize, _t: f64, v: &[f64]) -> Vec<[f64; 3]> {

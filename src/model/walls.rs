@@ -781,8 +781,8 @@ impl Contribution for Wall {
     }
 
     /// The surface where it is; an entity's traced points as a point grid too (one
-    /// vertex per point, each step: ParaView's "Temporal Particles To Pathlines" draws
-    /// their paths; the history has them as columns).
+    /// vertex per point), with their paths so far as polylines (the history has them
+    /// as columns at every step).
     fn grids(&self) -> Vec<GridSpec> {
         let (points, tris) = self.shape.surface();
         let kind = if self.body.is_some() {
@@ -804,6 +804,7 @@ impl Contribution for Wall {
             ],
             cells: tris.iter().map(|t| t.to_vec()).collect(),
             n_points: points.len(),
+            paths: false,
         }];
         if let Some(b) = self.def.body.as_ref().filter(|b| !b.trace.is_empty()) {
             g.push(GridSpec {
@@ -819,6 +820,7 @@ impl Contribution for Wall {
                 )],
                 cells: (0..b.trace.len()).map(|k| vec![k]).collect(),
                 n_points: b.trace.len(),
+                paths: true,
             });
         }
         g

@@ -6,7 +6,8 @@
 
 use super::h5::H5File;
 use super::xdmf::{
-    write_xdmf_with_grids, AttrKind, Center, XdmfAttr, XdmfGrid, XdmfMesh, XdmfStep, XdmfTopology,
+    write_xdmf_with_grids, AttrKind, Center, GridAt, XdmfAttr, XdmfGrid, XdmfMesh, XdmfStep,
+    XdmfTopology,
 };
 use crate::mesh::ElemKind;
 use crate::model::contribution::Center as FieldCenter;
@@ -17,10 +18,14 @@ use crate::{Error, Result};
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
-/// A contribution's moving geometry in the file: its HDF5 group and point count.
+/// A contribution's moving geometry in the file: its HDF5 group, point count and
+/// cells, and (for a grid whose paths are drawn) the points of every output step so
+/// far, step-major (rank 0's copy) with the index of its path grid in `xgrids`.
 struct GridOut {
     group: String,
     n_points: usize,
+    cells: (String, u64),
+    path: Option<(usize, Vec<[f64; 3]>)>,
 }
 
 pub struct ResultsWriter {
@@ -71,6 +76,45 @@ fn grid_groups(names: &[String]) -> Vec<String> {
         out.push(format!("{dir}{g}"));
     }
     out
+}
+
+/// Collective: the paths of `n` points through the output steps so far, after adding
+/// this step's `now` (rank 0's; `so_far` grows on rank 0 only), `n_steps` output steps
+/// in all with this one, as points (step-major:
+/// step s, point p is row s n + p) and segments joining each point's consecutive rows
+/// (at the first step, one degenerate segment per point). Its size grows with the
+/// step count, but a step's fields (several values per node) stay larger for as many
+/// output steps as a run has nodes, so the file does not grow faster than its fields.
+fn write_paths(
+    h5: &H5File,
+    group: &str,
+    n: usize,
+    n_steps: usize,
+    so_far: &mut Vec<[f64; 3]>,
+    now: &[[f64; 3]],
+    rank0: bool,
+) -> Result<GridAt> {
+    so_far.extend_from_slice(now);
+    let n_points = (n_steps * n) as u64;
+    let n_cells = ((n_steps - 1).max(1) * n) as u64;
+    let (points, segments): (Vec<f64>, Vec<i64>) = if rank0 {
+        let seg = (0..n_cells as usize).flat_map(|r| {
+            let a = r as i64;
+            [a, if n_steps > 1 { a + n as i64 } else { a }]
+        });
+        (so_far.iter().flatten().copied().collect(), seg.collect())
+    } else {
+        (Vec::new(), Vec::new())
+    };
+    let at = GridAt {
+        points: format!("{group}/points"),
+        n_points,
+        cells: format!("{group}/segments"),
+        n_cells,
+    };
+    h5.write_rows_f64(&at.points, n_points, 3, 0, &points)?;
+    h5.write_rows_i64(&at.cells, n_cells, 2, 0, &segments)?;
+    Ok(at)
 }
 
 /// The header of `history.csv` (README "Outputs"); [`history_row`] writes the rows.
@@ -245,15 +289,22 @@ impl ResultsWriter {
             bytes += 8 * flat.len() as u64;
             xgrids.push(XdmfGrid {
                 name: g.label.clone(),
-                cells_path: path,
-                n_cells: g.cells.len() as u64,
                 nodes_per_cell: width as u64,
-                n_points: g.n_points as u64,
-                points_paths: Vec::new(),
+                steps: Vec::new(),
+            });
+            let path_grid = g.paths.then(|| {
+                xgrids.push(XdmfGrid {
+                    name: format!("{}_path", g.label),
+                    nodes_per_cell: 2,
+                    steps: Vec::new(),
+                });
+                (xgrids.len() - 1, Vec::new())
             });
             grids.push(GridOut {
                 group,
                 n_points: g.n_points,
+                cells: (path, g.cells.len() as u64),
+                path: path_grid,
             });
         }
         h5.create_group("/steps")?;
@@ -409,8 +460,10 @@ impl ResultsWriter {
             // Moving geometry at this step (rank 0 writes the rows, every rank takes part).
             if !self.grids.is_empty() {
                 let points = model.grid_points(rec.time, &rec.columns);
-                for ((gr, xg), pts) in self.grids.iter().zip(&mut self.xgrids).zip(points) {
-                    let flat: Vec<f64> = if comm.rank() == 0 {
+                let mut grid = 0;
+                for (gr, pts) in self.grids.iter_mut().zip(points) {
+                    let rank0 = comm.rank() == 0;
+                    let flat: Vec<f64> = if rank0 {
                         pts.iter().flatten().copied().collect()
                     } else {
                         Vec::new()
@@ -419,7 +472,27 @@ impl ResultsWriter {
                     self.h5
                         .write_rows_f64(&path, gr.n_points as u64, 3, 0, &flat)?;
                     self.bytes_written += 8 * flat.len() as u64;
-                    xg.points_paths.push(path);
+                    self.xgrids[grid].steps.push(GridAt {
+                        points: path,
+                        n_points: gr.n_points as u64,
+                        cells: gr.cells.0.clone(),
+                        n_cells: gr.cells.1,
+                    });
+                    grid += 1;
+                    if let Some((i, so_far)) = gr.path.as_mut() {
+                        let at = write_paths(
+                            &self.h5,
+                            &format!("{g}/{}/path", gr.group),
+                            gr.n_points,
+                            self.xgrids[*i].steps.len() + 1,
+                            so_far,
+                            if rank0 { &pts } else { &[] },
+                            rank0,
+                        )?;
+                        self.bytes_written += at.n_points * 24 + at.n_cells * 16;
+                        self.xgrids[*i].steps.push(at);
+                        grid += 1;
+                    }
                 }
             }
             self.h5.flush()?;

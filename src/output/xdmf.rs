@@ -200,21 +200,28 @@ fn attribute(out: &mut String, pad: &str, h5: &str, a: &XdmfAttr) {
     let _ = writeln!(out, "{pad}        </Attribute>");
 }
 
-/// Moving geometry drawn beside the mesh (a rigid wall's surface, a reference point):
-/// cells of one kind (points, segments or triangles) written once, points written at
-/// every output step.
+/// Moving geometry drawn beside the mesh (a rigid wall's surface, a reference point, a
+/// traced point's path so far): cells of one kind (points, segments or triangles) and
+/// points at every output step. The cells may be one dataset every step shares or grow
+/// from step to step (a path).
 #[derive(Debug, Clone, PartialEq)]
 pub struct XdmfGrid {
     /// The grid's name (ParaView's block name).
     pub name: String,
-    /// HDF5 path of the cells, i64 `(n_cells, nodes_per_cell)`, 0-based into the points.
-    pub cells_path: String,
-    pub n_cells: u64,
     /// 1 (Polyvertex), 2 (Polyline segments) or 3 (Triangle).
     pub nodes_per_cell: u64,
+    /// Its datasets at each step (same order as the steps).
+    pub steps: Vec<GridAt>,
+}
+
+/// An [`XdmfGrid`] at one step: HDF5 paths of its points, f64 `(n_points, 3)`, and of
+/// its cells, i64 `(n_cells, nodes_per_cell)`, 0-based into the points.
+#[derive(Debug, Clone, PartialEq)]
+pub struct GridAt {
+    pub points: String,
     pub n_points: u64,
-    /// HDF5 path of the points, f64 `(n_points, 3)`, of each step (same order as the steps).
-    pub points_paths: Vec<String>,
+    pub cells: String,
+    pub n_cells: u64,
 }
 
 /// The whole XDMF document for `steps` (pure: no I/O).
@@ -296,17 +303,18 @@ pub fn xdmf_text_with_grids(
         )));
     }
     for w in grids {
-        if w.points_paths.len() != steps.len() {
+        if w.steps.len() != steps.len() {
             return Err(Error::runtime(format!(
                 "XDMF grid '{}': points for {} steps, there are {}",
                 w.name,
-                w.points_paths.len(),
+                w.steps.len(),
                 steps.len()
             )));
         }
         if w.name.is_empty()
-            || !w.cells_path.starts_with('/')
-            || w.points_paths.iter().any(|p| !p.starts_with('/'))
+            || w.steps
+                .iter()
+                .any(|a| !a.cells.starts_with('/') || !a.points.starts_with('/'))
             || !(1..=3).contains(&w.nodes_per_cell)
         {
             return Err(Error::runtime(format!(
@@ -337,6 +345,7 @@ pub fn xdmf_text_with_grids(
         let _ = writeln!(out, "        <Time Value=\"{:?}\"/>", s.time);
         mesh_grid(&mut out, "  ", "mesh", None, mesh, s);
         for w in grids {
+            let at = &w.steps[i];
             let _ = writeln!(
                 out,
                 "        <Grid Name=\"{}\" GridType=\"Uniform\">",
@@ -350,14 +359,14 @@ pub fn xdmf_text_with_grids(
             let _ = writeln!(
                 out,
                 "          <Topology {topology} NumberOfElements=\"{}\">",
-                w.n_cells
+                at.n_cells
             );
             data_item(
                 &mut out,
                 "            ",
                 h5,
-                &w.cells_path,
-                &dims(w.n_cells, w.nodes_per_cell),
+                &at.cells,
+                &dims(at.n_cells, w.nodes_per_cell),
                 "Int",
                 8,
             );
@@ -367,8 +376,8 @@ pub fn xdmf_text_with_grids(
                 &mut out,
                 "            ",
                 h5,
-                &w.points_paths[i],
-                &dims(w.n_points, 3),
+                &at.points,
+                &dims(at.n_points, 3),
                 "Float",
                 8,
             );
@@ -617,11 +626,8 @@ print(json.dumps(out))
             .unwrap();
         let mut wall = XdmfGrid {
             name: "wall_floor".into(),
-            cells_path: "/walls/floor/triangles".into(),
-            n_cells: 2,
             nodes_per_cell: 3,
-            n_points: 4,
-            points_paths: Vec::new(),
+            steps: Vec::new(),
         };
         let mut steps = Vec::new();
         for (k, t) in [0.5, 1.0].into_iter().enumerate() {
@@ -630,7 +636,12 @@ print(json.dumps(out))
                 .unwrap();
             f.write_rows_f64(&format!("{g}/walls/floor/points"), 4, 3, 0, &[t; 12])
                 .unwrap();
-            wall.points_paths.push(format!("{g}/walls/floor/points"));
+            wall.steps.push(GridAt {
+                points: format!("{g}/walls/floor/points"),
+                n_points: 4,
+                cells: "/walls/floor/triangles".into(),
+                n_cells: 2,
+            });
             steps.push(XdmfStep {
                 time: t,
                 attrs: vec![attr(
@@ -679,7 +690,7 @@ print(json.dumps(out))
             );
         }
         // A wall must have points for every step.
-        wall.points_paths.pop();
+        wall.steps.pop();
         let e = xdmf_text_with_grids(&mesh, &steps, &[wall]).unwrap_err();
         assert!(e.message.contains("points for 1 steps, there are 2"), "{e}");
         let _ = std::fs::remove_dir_all(&dir);
