@@ -1189,6 +1189,42 @@ fn entity_roll_same_on_one_and_two_ranks() {
     }
 }
 
+/// A body with mass in implicit dynamics on 2 ranks (`tests/entity-drop.toml`: a plate
+/// dropped on an elastic column whose top nodes both ranks own; the plate's mass on its
+/// owner only): the 1-rank run, step for step (measured 1e-14).
+#[test]
+fn entity_drop_same_on_one_and_two_ranks() {
+    let dir = temp_dir("rank-entity-drop");
+    std::fs::write(dir.join("drop.toml"), include_str!("entity-drop.toml")).unwrap();
+    let check = ok(alfe(&dir, 1, &["check", "drop.toml", "--ranks", "2"]));
+    assert!(
+        check.contains("entity plate: nodes owned by rank(s) 0,1"),
+        "{check}"
+    );
+    ok(alfe(
+        &dir,
+        1,
+        &["run", "drop.toml", "--out", "r1", "--quiet"],
+    ));
+    ok(alfe(
+        &dir,
+        2,
+        &["run", "drop.toml", "--out", "r2", "--quiet"],
+    ));
+    let (a, b) = (dir.join("r1"), dir.join("r2"));
+    assert_same_runs_within(&a, &b, "drop", false, 1e-10);
+    let (ha, hb) = (
+        history(&a.join("history.csv")),
+        history(&b.join("history.csv")),
+    );
+    let i = ha[0].iter().position(|c| c == "kinetic_energy").unwrap();
+    assert_eq!(ha.len(), hb.len());
+    for (x, y) in ha[1..].iter().zip(&hb[1..]) {
+        let (x, y): (f64, f64) = (x[i].parse().unwrap(), y[i].parse().unwrap());
+        assert!((x - y).abs() < 1e-10, "kinetic energy {x} vs {y}");
+    }
+}
+
 /// `sphere-roll` (paper §3.5) on 1 and 2 ranks, with the contact zone split between
 /// them (METIS cuts the block through its centre): the same displacements at every
 /// step, the same pole trace; it finishes, never penetrates, and the sphere rolls (its

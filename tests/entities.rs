@@ -2,8 +2,10 @@
 //! prescribed or free. The generalized Jacobian with the body coupling against finite
 //! differences; an entity with every DOF prescribed against the same rigid wall
 //! (hertz-sphere); a free sphere that rolls and a locked one that slides at μN; deck
-//! mistakes; Cattaneo–Mindlin partial slip under a tangential force on a free DOF. The
-//! 1 vs 2 rank comparison of `sphere-roll` is in `cli_mpi.rs`.
+//! mistakes; Cattaneo–Mindlin partial slip under a tangential force on a free DOF; in
+//! implicit dynamics, a free body with mass and inertia, and a plate dropped on an
+//! elastic column. The 1 vs 2 rank comparisons of `sphere-roll` and the drop are in
+//! `cli_mpi.rs`.
 
 mod common;
 use common::*;
@@ -372,11 +374,32 @@ fn bad_entity_decks_name_the_field() {
         ),
         (
             edit(
-                &edit(&base, "type = \"static\"", "type = \"implicit\""),
+                &edit(&base, "type = \"static\"", "type = \"explicit\""),
                 "nu = 0.3",
                 "nu = 0.3\ndensity = 1e-9",
             ),
-            "contact entities need a static analysis",
+            "not explicit ones",
+        ),
+        (
+            edit(&base, "friction = 0.5", "friction = 0.5\nmass = 1.0"),
+            "entities[0].mass: a static analysis has no inertia",
+        ),
+        (
+            edit(&drop_deck(), "mass = 1.0", "mass = -1.0"),
+            "entities[0].mass: expected a positive number, got -1",
+        ),
+        (
+            edit(
+                &drop_deck(),
+                "velocity = [0, 0, -1]",
+                "velocity = [0, 0, -1]\nspin = [0, inf, 0]",
+            ),
+            "entities[0].spin: expected finite numbers",
+        ),
+        (
+            edit(&drop_deck(), "[[entities]]", "[[walls]]")
+                .replace("[entities.motion]\nuz = { type = \"free\" }", ""),
+            "walls[0].mass: mass, inertia and initial velocities belong to contact entities",
         ),
     ];
     for (deck, want) in cases {
@@ -384,4 +407,93 @@ fn bad_entity_decks_name_the_field() {
         let msg = e.to_string();
         assert!(msg.contains(want), "expected `{want}` in: {msg}");
     }
+}
+
+/// A rigid plate (mass m, initial velocity v₀ down) dropped onto an elastic column
+/// (linear elastic, ν = 0, fixed base, E A / L = k, its mass 1 % of the plate's), with
+/// the plate's uz free; everything else is prescribed at zero (`tests/entity-drop.toml`).
+fn drop_deck() -> String {
+    include_str!("entity-drop.toml").to_string()
+}
+
+/// A free body with mass and inertia, touching nothing, moves as Newton says, and the
+/// average-acceleration Newmark rule integrates constant accelerations exactly: from
+/// its initial velocity ux = v₀ t and ry = ω₀ t, under a constant force uz = F t²/(2m)
+/// and under a constant moment rz = M t²/(2J) (J isotropic, so no gyroscopic term); its
+/// kinetic energy ½ m v² + ½ J ω² is in the energy balance with the loads' work.
+#[test]
+fn a_free_body_moves_as_newton_says() {
+    let deck = edit(
+        &edit(
+            &edit(
+                &drop_deck(),
+                "point = [5, 5, 10.001]",
+                "point = [5, 5, 30]\ninertia = 2.0",
+            ),
+            "mass = 1.0\nvelocity = [0, 0, -1]",
+            "mass = 0.5\nvelocity = [2, 0, 0]\nspin = [0, 0.5, 0]",
+        ),
+        "uz = { type = \"free\" }",
+        "ux = { type = \"free\" }\nuz = { type = \"force\", curve = \"one\", scale = -1.0 }\n\
+         ry = { type = \"free\" }\nrz = { type = \"force\", curve = \"one\", scale = 3.0 }\n\
+         [[curves]]\nname = \"one\"\npoints = [[0, 1], [1, 1]]",
+    );
+    let out = run_deck("ent-free-flight", &deck);
+    let t = column(&out, "time");
+    assert_eq!(t.last().copied(), Some(0.15));
+    let (m, j, f, mz, v0, w0) = (0.5, 2.0, -1.0, 3.0, 2.0, 0.5);
+    for (name, exact) in [
+        ("plate.ux", &(|t: f64| v0 * t) as &dyn Fn(f64) -> f64),
+        ("plate.uz", &|t: f64| f * t * t / (2.0 * m)),
+        ("plate.ry", &|t: f64| w0 * t),
+        ("plate.rz", &|t: f64| mz * t * t / (2.0 * j)),
+        ("plate.uy", &|_| 0.0),
+        ("plate.rx", &|_| 0.0),
+    ] {
+        for (ti, v) in t.iter().zip(column(&out, name)) {
+            assert!(
+                (v - exact(*ti)).abs() < 1e-10,
+                "{name} at t = {ti}: {v} vs {}",
+                exact(*ti)
+            );
+        }
+    }
+    let te = 0.15;
+    let ke =
+        0.5 * m * (v0 * v0 + (f / m * te).powi(2)) + 0.5 * j * (w0 * w0 + (mz / j * te).powi(2));
+    let got = *column(&out, "kinetic_energy").last().unwrap();
+    assert!(rel_err(got, ke) < 1e-9, "kinetic energy {got} vs {ke}");
+    let worst = column(&out, "energy_balance")
+        .iter()
+        .fold(0.0f64, |a, b| a.max(b.abs()));
+    assert!(worst < 1e-9, "energy balance {worst:e}");
+}
+
+/// The dropped plate compresses the column as a mass on a spring k = E A / L: the
+/// largest compression is v₀ √(m/k) (energy; the column's own 1 % of mass is at rest
+/// then) within 1 % (measured −0.19 %), the plate never penetrates, it leaves with at
+/// least 99 % of v₀ (measured 99.75 %: the column's top nodes lose their velocity
+/// relative to the plate at impact, contact persistency, and the column keeps ringing),
+/// and the energy balance stays within 1 % (measured 0.10 %).
+#[test]
+fn a_dropped_plate_bounces_off_an_elastic_column() {
+    let out = run_deck("ent-drop", &drop_deck());
+    let (t, uz) = (column(&out, "time"), column(&out, "plate.uz"));
+    let k = 100.0 * 100.0 / 10.0;
+    let delta = -uz.iter().fold(0.0f64, |a, &b| a.min(b)) - 0.001;
+    let want = (1.0f64 / k).sqrt();
+    assert!(rel_err(delta, want) < 0.01, "compression {delta} vs {want}");
+    let n = t.len();
+    let v_end = (uz[n - 1] - uz[n - 2]) / (t[n - 1] - t[n - 2]);
+    assert!(
+        v_end > 0.99 && v_end < 1.0 + 1e-6,
+        "rebound velocity {v_end}"
+    );
+    assert!(column(&out, "max_penetration").iter().all(|&p| p < 1e-10));
+    assert!(column(&out, "contact_active").iter().any(|&a| a > 0.0));
+    assert_eq!(*column(&out, "plate.fz").last().unwrap(), 0.0, "it left");
+    let worst = column(&out, "energy_balance")
+        .iter()
+        .fold(0.0f64, |a, b| a.max(b.abs()));
+    assert!(worst < 0.01, "energy balance {worst}");
 }

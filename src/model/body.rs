@@ -50,6 +50,14 @@ pub struct BodyDef {
     pub length: f64,
     /// Body-fixed points traced in the history: name and reference position.
     pub trace: Vec<(String, [f64; 3])>,
+    /// Dynamics: mass of the translations and moment of inertia J about the reference
+    /// point (isotropic: a sphere's 2/5 m R², see [`Body::masses`]); 0 leaves those
+    /// DOFs algebraic (massless).
+    pub mass: f64,
+    pub inertia: f64,
+    /// Dynamics: initial velocity of the reference point and angular velocity.
+    pub velocity: [f64; 3],
+    pub spin: [f64; 3],
     /// The rank that owns the six unknowns (set when localized).
     pub owner: usize,
 }
@@ -314,6 +322,48 @@ impl Body {
                 m.add_block(self.global[h], self.global[h], &flat(&d, 1.0));
             }
         }
+    }
+
+    /// Dynamics, on the owner: the body's diagonal mass, m on U and J / L² on Θ = L ψ
+    /// (its rows are moments / L). Euler's equations J ω̇ + ω × J ω = M, with ψ̇ = ω
+    /// (ψ accumulates spatial rotation increments): the gyroscopic term vanishes for an
+    /// isotropic J, which is why J is one number here.
+    pub fn masses(&self, dofs: &DofMap) -> Vec<(usize, f64)> {
+        self.owned_values(dofs, |k| {
+            let l = self.def.length;
+            if k < 3 {
+                self.def.mass
+            } else {
+                self.def.inertia / (l * l)
+            }
+        })
+    }
+
+    /// Dynamics, on the owner: U̇ = v₀ and Θ̇ = L ω₀.
+    pub fn initial_velocities(&self, dofs: &DofMap) -> Vec<(usize, f64)> {
+        self.owned_values(dofs, |k| {
+            if k < 3 {
+                self.def.velocity[k]
+            } else {
+                self.def.length * self.def.spin[k - 3]
+            }
+        })
+    }
+
+    /// (owned index, value) of the six DOFs with a nonzero value, on the owner.
+    fn owned_values(&self, dofs: &DofMap, value: impl Fn(usize) -> f64) -> Vec<(usize, f64)> {
+        if !self.owner {
+            return Vec::new();
+        }
+        (0..6)
+            .filter(|&k| value(k) != 0.0)
+            .map(|k| {
+                let i = dofs
+                    .owned_index(3 * self.local[k / 3] + k % 3)
+                    .expect("the owner owns its unknowns");
+                (i, value(k))
+            })
+            .collect()
     }
 
     /// The pattern of a tracked node's coupling (`node`, `mult` global blocks).

@@ -274,4 +274,14 @@ pub trait Contribution {
     /// Implicit dynamics, after a converged step ending at t: corrections of owned
     /// velocities and accelerations (contact persistency).
     fn persistency(&self, _v: &mut [f64], _a: &mut [f64], _t: f64, _h: f64) {}
+
+    /// Dynamics: the diagonal mass of the unknowns it owns here (owned index, mass; a
+    /// rigid body's translations and rotations). Unknowns without mass stay algebraic.
+    fn masses(&self, _dofs: &DofMap) -> Vec<(usize, f64)> {
+        Vec::new()
+    }
+    /// Dynamics: initial velocities of the unknowns it owns here (owned index, value).
+    fn initial_velocities(&self, _dofs: &DofMap) -> Vec<(usize, f64)> {
+        Vec::new()
+    }
 }

@@ -235,6 +235,11 @@ impl DofMap {
             None
         }
     }
+    /// The global block of an owned-vector index (owned blocks are numbered
+    /// contiguously: nodes, then extras).
+    pub fn owned_global_block(&self, owned: usize) -> usize {
+        self.blocks.start() + owned / 3
+    }
     /// Where contribution `c`'s unknowns are.
     pub fn placed(&self, c: usize) -> Placed {
         self.placed[c]

@@ -70,7 +70,29 @@ impl Model {
         }
         let mut owned = vec![0.0; self.n_owned_dofs()];
         self.dofs.sum_to_owned(comm, &m, &mut owned);
+        for (i, mi) in self.extra_masses() {
+            owned[i] += mi;
+        }
         owned
+    }
+
+    /// The contributions' own masses (a rigid body's): (owned index, mass).
+    pub fn extra_masses(&self) -> Vec<(usize, f64)> {
+        self.each_ref().flat_map(|c| c.masses(&self.dofs)).collect()
+    }
+
+    /// The owned unknowns without mass that are not node displacements (multipliers,
+    /// reference points, massless body DOFs): algebraic in time integration.
+    pub fn algebraic_dofs(&self) -> Vec<usize> {
+        let massive: std::collections::BTreeSet<usize> = self
+            .extra_masses()
+            .into_iter()
+            .filter(|m| m.1 > 0.0)
+            .map(|m| m.0)
+            .collect();
+        self.extra_range()
+            .filter(|i| !massive.contains(i))
+            .collect()
     }
 
     /// out = M v on owned dofs (collective for the consistent mass).
@@ -106,6 +128,9 @@ impl Model {
                     }
                 }
                 self.dofs.sum_to_owned(comm, &f, out);
+                for (i, mi) in self.extra_masses() {
+                    out[i] += mi * v[i];
+                }
             }
         }
     }
@@ -118,6 +143,12 @@ impl Model {
                     let b = self.dofs.global_block(i);
                     let d = scale * m[3 * i];
                     k.add_block(b, b, &[d, 0.0, 0.0, 0.0, d, 0.0, 0.0, 0.0, d]);
+                }
+                for (i, _) in self.extra_masses() {
+                    let mut d = [0.0; 9];
+                    d[4 * (i % 3)] = scale * m[i];
+                    let b = self.dofs.owned_global_block(i);
+                    k.add_block(b, b, &d);
                 }
             }
             MassMatrix::Consistent => {
@@ -146,6 +177,12 @@ impl Model {
                         blocks[a] = self.dofs.global_block(node);
                     }
                     k.add_element(&blocks[..n], &ke[..w * w]);
+                }
+                for (i, mi) in self.extra_masses() {
+                    let mut d = [0.0; 9];
+                    d[4 * (i % 3)] = scale * mi;
+                    let b = self.dofs.owned_global_block(i);
+                    k.add_block(b, b, &d);
                 }
             }
         }
@@ -258,6 +295,11 @@ impl Model {
                 if n < no {
                     v[3 * n..3 * n + 3].copy_from_slice(vel);
                 }
+            }
+        }
+        for c in self.each_ref() {
+            for (i, vi) in c.initial_velocities(&self.dofs) {
+                v[i] = vi;
             }
         }
         v

@@ -149,7 +149,7 @@ impl ContributionKind for WallDef {
     fn explicit_ok(&self) -> Result<(), String> {
         match &self.body {
             Some(_) => Err(format!(
-                "entity `{}`: contact entities need a static analysis (the body has no mass for the explicit update)",
+                "entity `{}`: contact entities take part in static analyses and implicit dynamics (the explicit update has no kinematic enforcement for a free body)",
                 self.name
             )),
             None => Ok(()),
@@ -623,6 +623,16 @@ impl Contribution for Wall {
         }
     }
 
+    fn masses(&self, dofs: &DofMap) -> Vec<(usize, f64)> {
+        self.body.as_ref().map_or(Vec::new(), |b| b.masses(dofs))
+    }
+
+    fn initial_velocities(&self, dofs: &DofMap) -> Vec<(usize, f64)> {
+        self.body
+            .as_ref()
+            .map_or(Vec::new(), |b| b.initial_velocities(dofs))
+    }
+
     fn commit(&mut self) {
         if let Some(b) = &mut self.body {
             b.commit();
@@ -924,12 +934,14 @@ impl Contribution for Wall {
     /// normal acceleration to the wall's (zero for walls moving at constant speed). The
     /// impact's normal kinetic energy of these nodes is dissipated, as in a perfectly
     /// inelastic node-wall impact.
+    ///
+    /// An entity's surface moves with its body: from its committed pose to the
+    /// converged one.
     fn persistency(&self, v: &mut [f64], a: &mut [f64], t: f64, h: f64) {
-        if self.body.is_some() {
-            // Entities take part in static analyses only (the scene refuses others).
-            return;
-        }
-        let (pose, pose_old) = (self.def.motion.pose(t), self.def.motion.pose(t - h));
+        let (pose, pose_old) = match &self.body {
+            Some(b) => (b.pose_new(), b.pose_old()),
+            None => (self.def.motion.pose(t), self.def.motion.pose(t - h)),
+        };
         for (j, &n) in self.def.nodes.iter().enumerate() {
             let c = &self.last[j];
             if !(c.active && c.normal_force > 0.0) {

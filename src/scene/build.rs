@@ -507,11 +507,30 @@ pub fn build(deck: &Deck, deck_dir: &Path) -> Result<Scene> {
     let walls = super::walls::build_walls(&deck.walls, &wall_inputs, "walls")?;
     let entities = super::walls::build_walls(&deck.entities, &wall_inputs, "entities")?;
     if !deck.entities.is_empty() {
-        if deck.analysis.kind != AnalysisKind::Static {
+        if deck.analysis.kind == AnalysisKind::Explicit {
             return Err(err(
                 "entities",
-                "contact entities need a static analysis (their bodies have no mass or inertia yet); use a rigid wall with a prescribed motion in dynamics",
+                "contact entities take part in static analyses and implicit dynamics, not explicit ones (the explicit update has no kinematic enforcement for a free body); use analysis.kind = \"implicit\", or a rigid wall with a prescribed motion",
             ));
+        }
+        if deck.analysis.kind == AnalysisKind::Static {
+            let dynamic = deck.entities.iter().enumerate().find_map(|(i, e)| {
+                [
+                    ("mass", e.mass.is_some()),
+                    ("inertia", e.inertia.is_some()),
+                    ("velocity", e.velocity.is_some()),
+                    ("spin", e.spin.is_some()),
+                ]
+                .into_iter()
+                .find(|d| d.1)
+                .map(|d| (i, d.0))
+            });
+            if let Some((i, key)) = dynamic {
+                return Err(err(
+                    format!("entities[{i}].{key}"),
+                    "a static analysis has no inertia; give it in implicit dynamics (analysis.kind = \"implicit\") or remove it",
+                ));
+            }
         }
         if deck.solver.linear.preconditioner == crate::linalg::PcKind::Amg {
             return Err(err(

@@ -85,6 +85,18 @@ pub struct WallDeck {
     /// Entities: body-fixed points whose paths are reported.
     #[serde(default)]
     pub trace: Option<Vec<TraceDeck>>,
+    /// Entities in dynamics: the body's mass and its (isotropic) moment of inertia
+    /// about the reference point; without them its free DOFs are massless.
+    #[serde(default)]
+    pub mass: Option<f64>,
+    #[serde(default)]
+    pub inertia: Option<f64>,
+    /// Entities in dynamics: initial velocity of the reference point and angular
+    /// velocity (radians per unit time).
+    #[serde(default)]
+    pub velocity: Option<[f64; 3]>,
+    #[serde(default)]
+    pub spin: Option<[f64; 3]>,
 }
 
 /// A body-fixed point of an entity, by its position at t = 0.
@@ -696,6 +708,31 @@ fn build_wall(w: &WallDeck, f: &str, inp: &WallInputs, entity: bool) -> Result<W
             v
         }
     };
+    let dynamic = [
+        ("mass", w.mass.is_some()),
+        ("inertia", w.inertia.is_some()),
+        ("velocity", w.velocity.is_some()),
+        ("spin", w.spin.is_some()),
+    ];
+    if let (Some((key, _)), false) = (dynamic.iter().find(|d| d.1), entity) {
+        return Err(err(
+            format!("{f}.{key}"),
+            "mass, inertia and initial velocities belong to contact entities ([[entities]]); a wall follows its prescribed motion",
+        ));
+    }
+    for (key, v) in [("mass", w.mass), ("inertia", w.inertia)] {
+        if let Some(v) = v.filter(|v| !(v.is_finite() && *v > 0.0)) {
+            return Err(err(
+                format!("{f}.{key}"),
+                format!("expected a positive number, got {v}"),
+            ));
+        }
+    }
+    for (key, v) in [("velocity", w.velocity), ("spin", w.spin)] {
+        if v.is_some_and(|v| v.iter().any(|x| !x.is_finite())) {
+            return Err(err(format!("{f}.{key}"), "expected finite numbers"));
+        }
+    }
     // A plane without a display size is drawn as large as the model.
     if let ShapeDef::Plane { display_size } = &mut shape {
         if *display_size == 0.0 {
@@ -724,6 +761,10 @@ fn build_wall(w: &WallDeck, f: &str, inp: &WallInputs, entity: bool) -> Result<W
             loads,
             length,
             trace,
+            mass: w.mass.unwrap_or(0.0),
+            inertia: w.inertia.unwrap_or(0.0),
+            velocity: w.velocity.unwrap_or_default(),
+            spin: w.spin.unwrap_or_default(),
             owner: 0,
         }),
     };

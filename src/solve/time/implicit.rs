@@ -169,11 +169,11 @@ pub fn run_implicit(
     model.forces(comm, &state.u, 0.0, &mut fi, &mut fe)?;
     let rhs: Vec<f64> = (0..n).map(|i| fe[i] - fi[i]).collect();
     state.a = vec![0.0; n];
-    // Multipliers and reference points carry no mass: their "acceleration" is held at
-    // zero.
-    let mults = model.extra_range();
+    // Multipliers, reference points and massless body DOFs carry no mass: their
+    // "acceleration" is held at zero.
+    let mults = model.algebraic_dofs();
     let mut a_pres: Vec<(usize, f64)> = motion.iter().map(|m| (m.0, m.3)).collect();
-    a_pres.extend(mults.clone().map(|d| (d, 0.0)));
+    a_pres.extend(mults.iter().map(|&d| (d, 0.0)));
     let mut r = vec![0.0; n];
     let st0 = {
         let mut prob = MassProblem {
@@ -231,7 +231,7 @@ pub fn run_implicit(
         }
         // Algebraic unknowns (multipliers, reference points) start from their last values
         // (they are not integrated in time).
-        for i in mults.clone() {
+        for &i in &mults {
             trial[i] = state.u[i];
         }
         let stats = {
@@ -271,7 +271,7 @@ pub fn run_implicit(
             v1[i] = p.velocity(h, state.v[i], state.a[i], a1[i]);
             du[i] = trial[i] - state.u[i];
         }
-        for i in mults.clone() {
+        for &i in &mults {
             a1[i] = 0.0;
             v1[i] = 0.0;
         }
