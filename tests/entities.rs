@@ -96,8 +96,28 @@ fn entity_jacobian_matches_finite_differences() {
         "translation = [10, 0, 0]",
         "translation = [0.2, 0, 0]",
     );
-    for (name, deck, tol) in [("sphere", sphere, 1e-6), ("plane", plane, 5e-5)] {
+    // An ellipsoid (its curvature varies along the surface) and a torus standing like a
+    // wheel (axis y; its inner side saddle-shaped), both frictionless with ry free.
+    let ellipsoid = edit(
+        &sphere,
+        "shape = \"sphere\"\nradius = 10.0",
+        "shape = \"ellipsoid\"\nradii = [14, 10, 10]",
+    );
+    let torus = edit(
+        &sphere,
+        "shape = \"sphere\"\nradius = 10.0",
+        "shape = \"torus\"\nradii = [6, 4]\nnormal = [0, 1, 0]",
+    );
+    for (name, deck, tol) in [
+        ("sphere", sphere, 1e-6),
+        ("plane", plane, 5e-5),
+        ("ellipsoid", ellipsoid, 1e-6),
+        ("torus", torus, 1e-6),
+    ] {
         let mut out = run_deck(&format!("ent-jac-{name}"), &deck);
+        let active = *column(&out, "contact_active").last().unwrap();
+        eprintln!("{name}: {active} nodes in contact");
+        assert!(active >= 3.0, "{name}: {active} nodes in contact");
         for (seed, amp) in [(1, 1e-4), (2, 1e-4), (3, 1e-3)] {
             let err = jacobian_fd_error(&mut out, seed, amp);
             eprintln!("{name}, seed {seed} amp {amp}: {err:e}");
@@ -383,6 +403,30 @@ fn bad_entity_decks_name_the_field() {
         (
             edit(&base, "friction = 0.5", "friction = 0.5\nmass = 1.0"),
             "entities[0].mass: a static analysis has no inertia",
+        ),
+        (
+            edit(
+                &base,
+                "radius = 10.0",
+                "radius = 10.0\nradii = [10, 10, 10]",
+            ),
+            "entities[0].radii: is not a parameter of shape sphere",
+        ),
+        (
+            edit(
+                &base,
+                "shape = \"sphere\"\nradius = 10.0",
+                "shape = \"torus\"\nradii = [4, 6]",
+            ),
+            "entities[0].radii: the tube radius 6 must be below the centre circle's 4",
+        ),
+        (
+            edit(
+                &base,
+                "shape = \"sphere\"\nradius = 10.0",
+                "shape = \"ellipsoid\"\nradii = [4, 6]",
+            ),
+            "entities[0].radii: expected 3 positive radii",
         ),
         (
             edit(&drop_deck(), "mass = 1.0", "mass = -1.0"),

@@ -4,8 +4,8 @@
 //! Contact laws need, at a slave point x, the signed distance function g(x) (the gap),
 //! its gradient n = ∇g (the outward normal), a tangent frame for friction, and ∇∇g
 //! (= ∂n/∂x) for the consistent linearisation of the normal direction. Everything here is
-//! closed-form, so a Newton iteration on the contact residual never solves an inner
-//! projection problem.
+//! closed-form but the ellipsoid's (a scalar root, found to machine precision), so a
+//! Newton iteration on the contact residual never solves an inner projection problem.
 //!
 //! Conventions: gap > 0 outside, < 0 inside (penetration); [n, t1, t2] right-handed
 //! (n × t1 = t2). Shapes are solid: "inside" is the rigid body's material.
@@ -26,7 +26,7 @@ pub struct Projection {
 }
 
 /// A rigid surface in its own frame (DESIGN.md "Contact: the formulation": rigid walls are
-/// plane, finite plane, cylinder, sphere, prism).
+/// plane, finite plane, cylinder, sphere, prism, ellipsoid, torus).
 pub trait Shape: std::fmt::Debug + Send + Sync {
     /// Projection of local point x; None where the shape cannot be touched from x (beyond a finite plane's edges, beyond a cylinder's ends).
     fn project(&self, x: [f64; 3]) -> Option<Projection>;
@@ -40,7 +40,8 @@ pub trait Shape: std::fmt::Debug + Send + Sync {
     }
     /// A triangulated surface for output (local frame): vertices and triangles (outward-facing counter-clockwise).
     fn surface(&self) -> (Vec<[f64; 3]>, Vec<[usize; 3]>);
-    /// Short kind name: "plane", "finite-plane", "cylinder", "sphere", "prism".
+    /// Short kind name: "plane", "finite-plane", "cylinder", "sphere", "prism",
+    /// "ellipsoid", "torus".
     fn kind(&self) -> &'static str;
 }
 
@@ -84,6 +85,24 @@ pub struct Sphere {
 pub struct Prism {
     /// Edge lengths along x, y, z.
     pub size: [f64; 3],
+}
+
+/// Solid ellipsoid x²/a² + y²/b² + z²/c² ≤ 1 centred at the origin, semi-axes along the
+/// local axes.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Ellipsoid {
+    /// Semi-axes a, b, c.
+    pub radii: [f64; 3],
+}
+
+/// Solid torus about the z axis centred at the origin: the points within `tube` of the
+/// circle of radius `radius` in the plane z = 0 (ring torus: tube < radius).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Torus {
+    /// Radius of the centre circle R.
+    pub radius: f64,
+    /// Radius of the tube r < R.
+    pub tube: f64,
 }
 
 /// Below this fraction of the radius the radial direction is undefined (x on the axis or
@@ -495,6 +514,252 @@ impl Shape for Prism {
     fn kind(&self) -> &'static str {
         "prism"
     }
+}
+
+/// ∇∇g at a distance g from a surface point with outward normal n whose shape operator
+/// in the tangent basis (t1, t2) is W: Σ κ/(1 + g κ) over the principal curvatures,
+/// i.e. W (I + g W)⁻¹ in that basis (2 × 2, symmetric), made exactly symmetric.
+fn offset_hessian(g: f64, w: [[f64; 2]; 2], t: [[f64; 3]; 2]) -> [[f64; 3]; 3] {
+    let m = [
+        [1.0 + g * w[0][0], g * w[0][1]],
+        [g * w[1][0], 1.0 + g * w[1][1]],
+    ];
+    let det = m[0][0] * m[1][1] - m[0][1] * m[1][0];
+    let inv = [
+        [m[1][1] / det, -m[0][1] / det],
+        [-m[1][0] / det, m[0][0] / det],
+    ];
+    let h2: [[f64; 2]; 2] =
+        std::array::from_fn(|a| std::array::from_fn(|b| w[a][0] * inv[0][b] + w[a][1] * inv[1][b]));
+    let mut h = [[0.0; 3]; 3];
+    for i in 0..3 {
+        for j in i..3 {
+            let mut v = 0.0;
+            for a in 0..2 {
+                for b in 0..2 {
+                    v += 0.5 * (h2[a][b] + h2[b][a]) * t[a][i] * t[b][j];
+                }
+            }
+            h[i][j] = v;
+            h[j][i] = v;
+        }
+    }
+    h
+}
+
+impl Ellipsoid {
+    /// Checks the dimensions; the message names the offending field.
+    pub fn validate(&self) -> Result<(), String> {
+        for (i, &r) in self.radii.iter().enumerate() {
+            check_positive(&format!("radii[{i}]"), r)?;
+        }
+        Ok(())
+    }
+}
+
+impl Shape for Ellipsoid {
+    /// The closest point p is x's foot along the normal: pᵢ = eᵢ² xᵢ / (t + eᵢ²) with t
+    /// the root of F(t) = Σ (eᵢ xᵢ / (t + eᵢ²))² = 1 above −min eᵢ² over the axes where
+    /// xᵢ ≠ 0; F decreases there, so a bracketed Newton iteration finds it (Eberly,
+    /// "Distance from a point to an ellipse, an ellipsoid, or a hyperellipsoid", 2013).
+    /// For a point that deep inside, off its plane of symmetry, no closest point lies in
+    /// that plane and the shape says none (g is not smooth there anyway). The Hessian is
+    /// the offset surface's: W (I + g W)⁻¹ with W the shape operator at p.
+    fn project(&self, x: [f64; 3]) -> Option<Projection> {
+        let e = self.radii;
+        let emax = e[0].max(e[1]).max(e[2]);
+        let tiny = AXIS_TOL * emax;
+        let y: [f64; 3] = std::array::from_fn(|i| x[i].abs());
+        let nonzero: Vec<usize> = (0..3).filter(|&i| y[i] > tiny).collect();
+        if nonzero.is_empty() {
+            return None;
+        }
+        let lo0 = nonzero
+            .iter()
+            .map(|&i| -e[i] * e[i])
+            .fold(f64::MIN, f64::max);
+        let f = |t: f64| -> (f64, f64) {
+            let (mut v, mut d) = (-1.0, 0.0);
+            for &i in &nonzero {
+                let q = e[i] * y[i] / (t + e[i] * e[i]);
+                v += q * q;
+                d -= 2.0 * q * q / (t + e[i] * e[i]);
+            }
+            (v, d)
+        };
+        let hi0 = nonzero
+            .iter()
+            .map(|&i| (e[i] * y[i]).powi(2))
+            .sum::<f64>()
+            .sqrt();
+        // Newton from t = 0 (G(0) = Σ xᵢ²/eᵢ² − 1: the root is > 0 outside, < 0
+        // inside), bisecting whenever a step leaves the bracket [lo, hi].
+        let (mut lo, mut hi) = (lo0, hi0.max(0.0));
+        let mut t = 0.0;
+        for _ in 0..200 {
+            let (v, d) = f(t);
+            if v == 0.0 {
+                break;
+            }
+            if v > 0.0 {
+                lo = t;
+            } else {
+                hi = t;
+            }
+            let step = -v / d;
+            let next = t + step;
+            if next >= lo && next <= hi {
+                t = next;
+                if step.abs() <= 1e-15 * (t.abs() + emax * emax) {
+                    break;
+                }
+            } else {
+                t = 0.5 * (lo + hi);
+            }
+            if hi - lo <= 1e-15 * emax * emax {
+                break;
+            }
+        }
+        // A zero component stays in its plane only where t + eᵢ² > 0 for it too.
+        if (0..3).any(|i| y[i] <= tiny && t + e[i] * e[i] <= 0.0) {
+            return None;
+        }
+        let point: [f64; 3] = std::array::from_fn(|i| {
+            if y[i] <= tiny {
+                0.0
+            } else {
+                e[i] * e[i] * x[i] / (t + e[i] * e[i])
+            }
+        });
+        // Outward normal ∝ ∇(Σ pᵢ²/eᵢ²) at p.
+        let q: [f64; 3] = std::array::from_fn(|i| point[i] / (e[i] * e[i]));
+        let qn = norm(q);
+        let n = scale(1.0 / qn, q);
+        let inside = (0..3).map(|i| (x[i] / e[i]).powi(2)).sum::<f64>() < 1.0;
+        let dist = norm(sub(x, point));
+        let gap = if inside { -dist } else { dist };
+        let tangents = tangents_from_normal(n);
+        // Shape operator at p: P diag(1/eᵢ²) P / |q| in the tangent basis.
+        let w: [[f64; 2]; 2] = std::array::from_fn(|a| {
+            std::array::from_fn(|b| {
+                (0..3)
+                    .map(|i| tangents[a][i] * tangents[b][i] / (e[i] * e[i]))
+                    .sum::<f64>()
+                    / qn
+            })
+        });
+        Some(Projection {
+            gap,
+            normal: n,
+            point,
+            tangents,
+            hessian: offset_hessian(gap, w, tangents),
+        })
+    }
+
+    /// The sphere's triangulation scaled by the semi-axes (still outward).
+    fn surface(&self) -> (Vec<[f64; 3]>, Vec<[usize; 3]>) {
+        let (v, t) = Sphere { radius: 1.0 }.surface();
+        let e = self.radii;
+        (
+            v.into_iter()
+                .map(|p| [e[0] * p[0], e[1] * p[1], e[2] * p[2]])
+                .collect(),
+            t,
+        )
+    }
+
+    fn kind(&self) -> &'static str {
+        "ellipsoid"
+    }
+}
+
+impl Torus {
+    /// Checks the dimensions; the message names the offending field.
+    pub fn validate(&self) -> Result<(), String> {
+        check_positive("radii[0]", self.radius)?;
+        check_positive("radii[1]", self.tube)?;
+        if self.tube >= self.radius {
+            return Err(format!(
+                "radii: the tube radius {} must be below the centre circle's {} (a ring torus)",
+                self.tube, self.radius
+            ));
+        }
+        Ok(())
+    }
+}
+
+impl Shape for Torus {
+    /// g = |x − c| − r with c = R e_ρ the nearest point of the centre circle (e_ρ the
+    /// radial direction of x); n = (x − c)/|x − c|. The level sets are tori: ∇∇g has
+    /// curvature 1/|x − c| along the meridian n × e_φ and (n · e_ρ)/ρ along the parallel
+    /// e_φ (ρ the distance from the axis). None on the axis and on the centre circle.
+    fn project(&self, x: [f64; 3]) -> Option<Projection> {
+        let (big, r) = (self.radius, self.tube);
+        let rho = (x[0] * x[0] + x[1] * x[1]).sqrt();
+        if rho < AXIS_TOL * big {
+            return None;
+        }
+        let er = [x[0] / rho, x[1] / rho, 0.0];
+        let d = sub(x, scale(big, er));
+        let dist = norm(d);
+        if dist < AXIS_TOL * big {
+            return None;
+        }
+        let n = scale(1.0 / dist, d);
+        let ephi = [-er[1], er[0], 0.0];
+        let t2 = cross(n, ephi);
+        let (k_m, k_p) = (1.0 / dist, dot(n, er) / rho);
+        let mut h = [[0.0; 3]; 3];
+        for i in 0..3 {
+            for j in i..3 {
+                let v = k_m * t2[i] * t2[j] + k_p * ephi[i] * ephi[j];
+                h[i][j] = v;
+                h[j][i] = v;
+            }
+        }
+        Some(Projection {
+            gap: dist - r,
+            normal: n,
+            point: add3(scale(big, er), scale(r, n)),
+            tangents: [ephi, t2],
+            hessian: h,
+        })
+    }
+
+    /// AROUND × AROUND / 2 quads along the parallels and meridians, two triangles each.
+    fn surface(&self) -> (Vec<[f64; 3]>, Vec<[usize; 3]>) {
+        use std::f64::consts::TAU;
+        let (big, r) = (self.radius, self.tube);
+        let (nu, nv) = (AROUND, AROUND / 2);
+        let mut v = Vec::with_capacity(nu * nv);
+        for i in 0..nu {
+            let u = TAU * i as f64 / nu as f64;
+            for j in 0..nv {
+                let w = TAU * j as f64 / nv as f64;
+                let rr = big + r * w.cos();
+                v.push([rr * u.cos(), rr * u.sin(), r * w.sin()]);
+            }
+        }
+        let at = |i: usize, j: usize| (i % nu) * nv + j % nv;
+        let mut t = Vec::with_capacity(2 * nu * nv);
+        for i in 0..nu {
+            for j in 0..nv {
+                // (u, w) counter-clockwise seen from outside: ∂/∂u × ∂/∂w points outward.
+                t.push([at(i, j), at(i + 1, j), at(i + 1, j + 1)]);
+                t.push([at(i, j), at(i + 1, j + 1), at(i, j + 1)]);
+            }
+        }
+        (v, t)
+    }
+
+    fn kind(&self) -> &'static str {
+        "torus"
+    }
+}
+
+fn add3(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
 }
 
 #[cfg(test)]
@@ -972,6 +1237,124 @@ mod tests {
             2.0 * (2.0 + 6.0 + 3.0),
             1e-14,
         );
+        // Knud Thomsen's approximation of the ellipsoid's area (within about 1 %).
+        let (a, b, c) = (2.0f64, 1.5f64, 1.0f64);
+        let p = 1.6075;
+        let thomsen =
+            4.0 * PI * (((a * b).powf(p) + (a * c).powf(p) + (b * c).powf(p)) / 3.0).powf(1.0 / p);
+        check_surface(&Ellipsoid { radii: [a, b, c] }, thomsen, 2e-2);
+        check_surface(
+            &Torus {
+                radius: 2.0,
+                tube: 0.5,
+            },
+            4.0 * PI * PI * 2.0 * 0.5,
+            1e-2,
+        );
+    }
+
+    /// The ellipsoid's gap against a brute-force distance to its surface sampled on a
+    /// fine grid of (θ, φ), every projection invariant (Newton's root to machine
+    /// precision: the finite-difference checks see it), points inside and outside, a
+    /// sphere as the special case, and none deep inside off a plane of symmetry.
+    #[test]
+    fn ellipsoid_random_points() {
+        let e = [2.0, 1.5, 1.0];
+        let shape = Ellipsoid { radii: e };
+        let mut rng = Lcg(11);
+        let (mut inside, mut outside) = (0, 0);
+        let m = 400;
+        let samples: Vec<[f64; 3]> = (0..m)
+            .flat_map(|i| {
+                (0..2 * m).map(move |j| {
+                    let th = std::f64::consts::PI * (i as f64 + 0.5) / m as f64;
+                    let ph = std::f64::consts::PI * j as f64 / m as f64;
+                    [
+                        e[0] * th.sin() * ph.cos(),
+                        e[1] * th.sin() * ph.sin(),
+                        e[2] * th.cos(),
+                    ]
+                })
+            })
+            .collect();
+        for k in 0..300 {
+            let u = rng.unit();
+            let on: [f64; 3] = std::array::from_fn(|i| e[i] * u[i] / norm([u[0], u[1], u[2]]));
+            let s = rng.uniform(0.85, 1.6);
+            let x = scale(s, on);
+            let p = match shape.project(x) {
+                Some(p) => p,
+                None => panic!("no projection at {x:?}"),
+            };
+            check_projection(&shape, x, true);
+            if k < 40 {
+                let brute = samples
+                    .iter()
+                    .map(|q| dist(*q, x))
+                    .fold(f64::INFINITY, f64::min);
+                // A sample lies within h = 0.012 (the grid's spacing) of the closest
+                // point, so the sampled minimum is at most √(g² + h²).
+                let h = 0.012;
+                assert!(
+                    p.gap.abs() <= brute + 1e-12 && brute <= (p.gap * p.gap + h * h).sqrt(),
+                    "{x:?}: gap {} vs sampled {brute}",
+                    p.gap
+                );
+            }
+            if p.gap < 0.0 {
+                inside += 1;
+            } else {
+                outside += 1;
+            }
+        }
+        assert!(inside > 30 && outside > 30, "{inside} in, {outside} out");
+        let ball = Ellipsoid { radii: [1.5; 3] };
+        let sphere = Sphere { radius: 1.5 };
+        for x in [[0.3, -2.0, 0.7], [0.2, 0.1, -0.9], [1.0, 1.0, 1.0]] {
+            let (a, b) = (ball.project(x).unwrap(), sphere.project(x).unwrap());
+            assert!((a.gap - b.gap).abs() < 1e-14, "{x:?}");
+            assert!(close(a.normal, b.normal, 1e-14), "{x:?}");
+        }
+        // On the axes and planes of symmetry.
+        check_projection(&shape, [2.5, 0.0, 0.0], true);
+        check_projection(&shape, [0.0, 0.0, -1.2], true);
+        check_projection(&shape, [1.9, 0.0, 0.0], true);
+        // The centre, and a point deep inside on the plane z = 0 whose nearest surface
+        // points lie off it (above and below): no projection.
+        assert!(shape.project([0.0; 3]).is_none());
+        assert!(shape.project([0.3, 0.0, 0.0]).is_none());
+    }
+
+    /// The torus: the gap is the distance to the tube's circle less r, every invariant
+    /// (inside the tube and out, on the outer and the inner side of the hole), and no
+    /// projection on the axis or on the centre circle.
+    #[test]
+    fn torus_random_points() {
+        let shape = Torus {
+            radius: 2.0,
+            tube: 0.5,
+        };
+        let mut rng = Lcg(12);
+        let (mut inside, mut outside, mut hole_side) = (0, 0, 0);
+        for _ in 0..300 {
+            let u = rng.uniform(0.0, std::f64::consts::TAU);
+            let w = rng.uniform(0.0, std::f64::consts::TAU);
+            let d = rng.uniform(0.1, 1.2);
+            let rr = 2.0 + d * w.cos();
+            let x = [rr * u.cos(), rr * u.sin(), d * w.sin()];
+            check_projection(&shape, x, true);
+            let p = shape.project(x).unwrap();
+            assert!((p.gap - (d - 0.5)).abs() < 1e-12, "{x:?}");
+            if p.gap < 0.0 {
+                inside += 1;
+            } else {
+                outside += 1;
+            }
+            hole_side += (w.cos() < 0.0) as usize;
+        }
+        assert!(inside > 30 && outside > 30 && hole_side > 30);
+        assert!(shape.project([0.0, 0.0, 1.0]).is_none());
+        assert!(shape.project([2.0, 0.0, 0.0]).is_none());
     }
 
     #[test]

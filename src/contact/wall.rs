@@ -3,7 +3,9 @@
 //! point and where it was at the start of the step).
 
 use super::motion::Pose;
-use super::shape::{Cylinder, FinitePlane, Plane, Prism, Projection, Shape, Sphere};
+use super::shape::{
+    Cylinder, Ellipsoid, FinitePlane, Plane, Prism, Projection, Shape, Sphere, Torus,
+};
 use serde::{Deserialize, Serialize};
 
 /// The shape of a wall, as a deck names it.
@@ -14,6 +16,8 @@ pub enum ShapeDef {
     Cylinder { radius: f64, length: f64 },
     Sphere { radius: f64 },
     Prism { size: [f64; 3] },
+    Ellipsoid { radii: [f64; 3] },
+    Torus { radius: f64, tube: f64 },
 }
 
 impl ShapeDef {
@@ -24,6 +28,8 @@ impl ShapeDef {
             ShapeDef::Cylinder { radius, length } => Box::new(Cylinder { radius, length }),
             ShapeDef::Sphere { radius } => Box::new(Sphere { radius }),
             ShapeDef::Prism { size } => Box::new(Prism { size }),
+            ShapeDef::Ellipsoid { radii } => Box::new(Ellipsoid { radii }),
+            ShapeDef::Torus { radius, tube } => Box::new(Torus { radius, tube }),
         }
     }
 }

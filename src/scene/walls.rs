@@ -26,6 +26,8 @@ pub enum ShapeKind {
     Cylinder,
     Sphere,
     Prism,
+    Ellipsoid,
+    Torus,
 }
 
 /// A rigid wall. Its local frame: origin `point`, z along `normal` (plane normal,
@@ -50,6 +52,10 @@ pub struct WallDeck {
     /// Cylinder length along its axis.
     #[serde(default)]
     pub length: Option<f64>,
+    /// Ellipsoid: semi-axes [a, b, c] along x_axis, y and normal; torus: [R, r], the
+    /// centre circle's radius (about `normal`) and the tube's.
+    #[serde(default)]
+    pub radii: Option<Vec<f64>>,
     /// Tracked nodes: a node set or surface name ...
     #[serde(default)]
     pub nodes: Option<String>,
@@ -490,6 +496,8 @@ fn body_length(shape: &ShapeDef, model_size: f64) -> f64 {
         ShapeDef::FinitePlane { lx, ly } => 0.5 * lx.max(ly),
         ShapeDef::Prism { size } => 0.5 * size[0].max(size[1]).max(size[2]),
         ShapeDef::Plane { .. } => 0.5 * model_size,
+        ShapeDef::Ellipsoid { radii } => radii[0].max(radii[1]).max(radii[2]),
+        ShapeDef::Torus { radius, tube } => radius + tube,
     }
 }
 
@@ -525,7 +533,53 @@ fn shape_def(w: &WallDeck, f: &str) -> Result<ShapeDef> {
             Ok(())
         }
     };
+    let radii = |n: usize| -> Result<Vec<f64>> {
+        match &w.radii {
+            Some(r) if r.len() == n && r.iter().all(|&x| x > 0.0 && x.is_finite()) => Ok(r.clone()),
+            Some(r) => Err(err(
+                format!("{f}.radii"),
+                format!("expected {n} positive radii, got {r:?}"),
+            )),
+            None => Err(err(
+                format!("{f}.radii"),
+                format!("missing ({n} radii for this shape)"),
+            )),
+        }
+    };
+    if !matches!(w.shape, ShapeKind::Ellipsoid | ShapeKind::Torus) {
+        unused("radii", w.radii.is_some())?;
+    }
     Ok(match w.shape {
+        ShapeKind::Ellipsoid => {
+            for (k, given) in [("radius", w.radius.is_some()), ("size", w.size.is_some())] {
+                unused(k, given)?;
+            }
+            unused("length", w.length.is_some())?;
+            let r = radii(3)?;
+            ShapeDef::Ellipsoid {
+                radii: [r[0], r[1], r[2]],
+            }
+        }
+        ShapeKind::Torus => {
+            for (k, given) in [("radius", w.radius.is_some()), ("size", w.size.is_some())] {
+                unused(k, given)?;
+            }
+            unused("length", w.length.is_some())?;
+            let r = radii(2)?;
+            if r[1] >= r[0] {
+                return Err(err(
+                    format!("{f}.radii"),
+                    format!(
+                        "the tube radius {} must be below the centre circle's {} (a ring torus)",
+                        r[1], r[0]
+                    ),
+                ));
+            }
+            ShapeDef::Torus {
+                radius: r[0],
+                tube: r[1],
+            }
+        }
         ShapeKind::Plane => {
             unused("radius", w.radius.is_some())?;
             unused("length", w.length.is_some())?;
