@@ -108,9 +108,26 @@ fn entity_jacobian_matches_finite_differences() {
         "shape = \"sphere\"\nradius = 10.0",
         "shape = \"torus\"\nradii = [6, 4]\nnormal = [0, 1, 0]",
     );
+    // Penalty leaves the node a penetration g: its lever arm r_x and the contact
+    // point's r_c = r_x − g n differ, and the contact point follows the node by
+    // I − n nᵀ − g H (with r_c for both and P_t for the latter, penalty's sphere was
+    // off by 7e-5). Frictionless: with friction a converged penalty state puts every
+    // slipping node exactly on the cone, where central differences straddle the kink.
+    let sphere_penalty = edit(
+        &sphere,
+        "friction = 0.0",
+        "friction = 0.0\nmethod = \"penalty\"",
+    );
+    let plane_penalty = edit(
+        &plane,
+        "friction = 0.5",
+        "friction = 0.0\nmethod = \"penalty\"",
+    );
     for (name, deck, tol) in [
         ("sphere", sphere, 1e-6),
         ("plane", plane, 5e-5),
+        ("sphere-penalty", sphere_penalty, 1e-6),
+        ("plane-penalty", plane_penalty, 1e-6),
         ("ellipsoid", ellipsoid, 1e-6),
         ("torus", torus, 1e-6),
     ] {

@@ -18,11 +18,11 @@
 //! position): the contact law sees the body's motion as the opposite motion of the node,
 //! δx_eq = δx − δU − δθ × r, and its frame turns with the body (δf gains δθ × f), so
 //! with B = [−I, [r]ₓ] the node's force depends on the body through
-//! ∂r_node/∂q = K_xx B + [0, [f]ₓ], and the body's rows are r_q = Σ Bᵀ r_node =
-//! Σ [f; r × f] (minus the applied load). Using the node's position rather than its
-//! projection in r is exact for the normal force (n × n = 0) and differs tangentially
-//! only by the gap, zero at a converged contact. The rotation columns carry the tangent
-//! of the exponential map, δθ = T(ψ − ψₙ) δψ.
+//! ∂r_node/∂q = K_xx B + [0, [f]ₓ]; the body's rows are r_q = Σ [f; r_c × f] (minus the
+//! applied load) with r_c the lever arm of the contact point, which follows the node
+//! through the projection's derivative I − n nᵀ − g H. (r and r_c differ by the gap:
+//! zero at a converged ALM contact, the penetration for penalty.) The rotation columns
+//! carry the tangent of the exponential map, δθ = T(ψ − ψₙ) δψ.
 
 // Index loops over 3×3 frames read like the formulas.
 #![allow(clippy::needless_range_loop)]
@@ -98,11 +98,13 @@ pub struct Body {
     u_new: [f64; 3],
 }
 
-/// What a tracked node's contact gives its body: the contact point on the body, its
-/// outward normal and the force on the node.
+/// What a tracked node's contact gives its body: the node's position, the contact
+/// point on the body and its derivative by the node's position relative to the body
+/// (I − n nᵀ − g H), and the force on the node.
 pub struct Contact {
+    pub node: [f64; 3],
     pub point: [f64; 3],
-    pub normal: [f64; 3],
+    pub dpoint: M3,
     pub force: [f64; 3],
 }
 
@@ -260,22 +262,24 @@ impl Body {
             return;
         };
         let [gu, gt] = self.global;
-        let n = c.normal;
-        let (sr, sf) = (skew(rc), skew(f));
-        // Tangential projector: the contact point slides with the node's tangential
-        // motion relative to the body.
-        let pt: M3 = std::array::from_fn(|i| std::array::from_fn(|j| ID[i][j] - n[i] * n[j]));
+        // The node moves relative to the body by δx − δU − δθ × r_x (r_x = x − c, its own
+        // lever arm); the contact point by D that motion plus the body's own (D = ∂p/∂x,
+        // the projection's derivative), so δr_c = D (δx − δU) + (D [r_x]ₓ − [r_c]ₓ) δθ.
+        // r_x and r_c differ by the gap along n: a penalty contact's penetration.
+        let rx = [c.node[0] - o[0], c.node[1] - o[1], c.node[2] - o[2]];
+        let (sr, sx, sf) = (skew(rc), skew(rx), skew(f));
+        let d = &c.dpoint;
         let tt = &s.dtheta;
-        // ∂r_node/∂U = −K_xx; ∂r_node/∂θ = K_xx [r_c]ₓ + [f]ₓ (the frame turns with the
+        // ∂r_node/∂U = −K_xx; ∂r_node/∂θ = K_xx [r_x]ₓ + [f]ₓ (the frame turns with the
         // body, so a rigid motion of node and body together turns f with them; on a
         // curved shape K_xx leaves out the tangents' turning with x, as for walls).
-        let g_th = add(&mul(k_xx, &sr), &sf, 1.0);
+        let g_th = add(&mul(k_xx, &sx), &sf, 1.0);
         let g_t = mul(&g_th, tt);
         jac.add_block(node, gu, &flat(k_xx, -1.0));
         jac.add_block(node, gt, &flat(&g_t, 1.0));
         if let Some(m) = mult {
             jac.add_block(m, gu, &flat(k_lx, -1.0));
-            jac.add_block(m, gt, &flat(&mul(&mul(k_lx, &sr), tt), 1.0));
+            jac.add_block(m, gt, &flat(&mul(&mul(k_lx, &sx), tt), 1.0));
             jac.add_block(gu, m, &flat(k_xl, -1.0));
             jac.add_block(gt, m, &flat(&mul(&sr, k_xl), -1.0 / l));
         }
@@ -283,12 +287,11 @@ impl Body {
         jac.add_block(gu, node, &flat(k_xx, -1.0));
         jac.add_block(gu, gu, &flat(k_xx, 1.0));
         jac.add_block(gu, gt, &flat(&g_t, -1.0));
-        // Θ rows: r_Θ = Σ r_c × f / L; δ(r_c × f) = −[f]ₓ δr_c − [r_c]ₓ δr_node with
-        // δr_c = P_t (δx − δU) + (P_t [r_c]ₓ − [r_c]ₓ) δθ.
-        let a = add(&mul(&sf, &pt), &mul(&sr, k_xx), 1.0);
+        // Θ rows: r_Θ = Σ r_c × f / L; δ(r_c × f) = −[f]ₓ δr_c − [r_c]ₓ δr_node.
+        let a = add(&mul(&sf, d), &mul(&sr, k_xx), 1.0);
         jac.add_block(gt, node, &flat(&a, -1.0 / l));
         jac.add_block(gt, gu, &flat(&a, 1.0 / l));
-        let d_rc = add(&mul(&pt, &sr), &sr, -1.0);
+        let d_rc = add(&mul(d, &sx), &sr, -1.0);
         let b = add(&mul(&sf, &d_rc), &mul(&sr, &g_th), 1.0);
         jac.add_block(gt, gt, &flat(&mul(&b, tt), -1.0 / l));
     }

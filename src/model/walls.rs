@@ -228,6 +228,8 @@ struct NodeEval {
     normal: Option<[f64; 3]>,
     /// The node's projection on the wall.
     point: Option<[f64; 3]>,
+    /// ∂point/∂x = I − n nᵀ − g H: how the closest point follows the node.
+    dpoint: [[f64; 3]; 3],
 }
 
 impl Wall {
@@ -323,6 +325,7 @@ impl Wall {
             ft_new: [0.0; 3],
             normal: None,
             point: None,
+            dpoint: [[0.0; 3]; 3],
         };
         let kappa = self.kappa[j];
         let alm_wall = self.is_alm();
@@ -353,6 +356,13 @@ impl Wall {
         e.c.gap = wp.gap;
         e.normal = Some([p[0][0], p[1][0], p[2][0]]);
         e.point = Some(wp.point);
+        let nv = [p[0][0], p[1][0], p[2][0]];
+        e.dpoint = std::array::from_fn(|i| {
+            std::array::from_fn(|k| {
+                let id = if i == k { 1.0 } else { 0.0 };
+                id - nv[i] * nv[k] - wp.gap * wp.hessian[i][k]
+            })
+        });
         let mu = self.def.friction;
         // f_local (force on the node in the frame), ∂f_local/∂g, and for ALM ∂f/∂λ.
         let (fl, dfdg) = if alm_wall {
@@ -383,7 +393,14 @@ impl Wall {
             }
             (fl, dfdg)
         } else {
-            let fo = self.ft_old[j];
+            // The force carried from the last step turns with the wall (or body) over
+            // the step: R Rₙᵀ f (objective; the entity coupling's Jacobian assumes it).
+            let f0 = self.ft_old[j];
+            let fo: [f64; 3] = std::array::from_fn(|i| {
+                (0..3)
+                    .map(|k| (0..3).map(|l| pose.r[i][l] * pose_old.r[k][l]).sum::<f64>() * f0[k])
+                    .sum()
+            });
             let t1 = [p[0][1], p[1][1], p[2][1]];
             let t2 = [p[0][2], p[1][2], p[2][2]];
             let fo_l = [
@@ -577,8 +594,7 @@ impl Contribution for Wall {
                     k.add_block(m, m, &flat(&e.k_ll, 1.0));
                 }
             }
-            if let (Some(b), Some(s), Some(xc), Some(nrm)) = (&self.body, &body, e.point, e.normal)
-            {
+            if let (Some(b), Some(s), Some(xc)) = (&self.body, &body, e.point) {
                 let a = ev.dofs.global_block(n);
                 let m = self.mult.map(|m0| ev.dofs.global_block(m0 + j));
                 let f = [-e.r_node[0], -e.r_node[1], -e.r_node[2]];
@@ -586,8 +602,9 @@ impl Contribution for Wall {
                     ev,
                     s,
                     Contact {
+                        node: x,
                         point: xc,
-                        normal: nrm,
+                        dpoint: e.dpoint,
                         force: f,
                     },
                     a,
