@@ -1,8 +1,10 @@
-//! Rigid contact: shapes, walls and the contact laws (DESIGN.md, "Contact: the
-//! formulation"). Kernels here are pure; the model's contact pass (`model::contact`)
-//! loops over tracked nodes and the parallel layer never sees any of it.
+//! Contact kernels: rigid shapes and walls, small-sliding pairs between deformable
+//! parts, and the contact laws they share (DESIGN.md, "Contact: the formulation").
+//! Kernels here are pure; the model's contributions (`model::walls`, `model::pairs`)
+//! loop over tracked nodes and the parallel layer never sees any of it.
 
 pub mod law;
 pub mod motion;
+pub mod pair;
 pub mod shape;
 pub mod wall;

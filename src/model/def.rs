@@ -220,6 +220,7 @@ contribution_kinds! {
     Load(super::loads::LoadDef),
     Wall(super::walls::WallDef),
     Coupling(super::coupling::CouplingDef),
+    Pairs(super::pairs::PairsDef),
 }
 
 #[cfg(test)]

@@ -19,7 +19,7 @@ use crate::{Error, Result};
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::Path;
 
-fn err(field: impl std::fmt::Display, msg: impl std::fmt::Display) -> Error {
+pub(crate) fn err(field: impl std::fmt::Display, msg: impl std::fmt::Display) -> Error {
     Error::input(format!("{field}: {msg}"))
 }
 
@@ -560,6 +560,14 @@ pub fn build(deck: &Deck, deck_dir: &Path) -> Result<Scene> {
             analysis: deck.analysis.kind,
         },
     )?;
+    let pairs = super::pairs::build_pairs(
+        &deck.pairs,
+        &super::pairs::PairInputs {
+            mesh: &mesh,
+            surfaces: &surfaces,
+            set_nodes: &set_nodes,
+        },
+    )?;
     // Walls and couplings name history columns (`<name>.fx`), as reaction and
     // displacement sets do: a name may stand for one of them only.
     let mut column_owner: BTreeMap<&str, String> = BTreeMap::new();
@@ -582,6 +590,7 @@ pub fn build(deck: &Deck, deck_dir: &Path) -> Result<Scene> {
             "couplings",
             deck.couplings.iter().map(|c| c.name.as_str()).collect(),
         ),
+        ("pairs", deck.pairs.iter().map(|c| c.name.as_str()).collect()),
     ];
     for (what, names) in &named {
         for (i, &n) in names.iter().enumerate() {
@@ -598,6 +607,7 @@ pub fn build(deck: &Deck, deck_dir: &Path) -> Result<Scene> {
     contributions.extend(walls.into_iter().map(ContributionDef::Wall));
     contributions.extend(entities.into_iter().map(ContributionDef::Wall));
     contributions.extend(couplings.into_iter().map(ContributionDef::Coupling));
+    contributions.extend(pairs.into_iter().map(ContributionDef::Pairs));
     let partition = match &deck.partition {
         None => crate::partition::Method::Metis,
         Some(p) => match (p.method, p.axis) {

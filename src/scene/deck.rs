@@ -42,6 +42,9 @@ pub struct Deck {
     /// Distributing couplings (a reference point tied to nodes, RBE3).
     #[serde(default)]
     pub couplings: Vec<super::coupling::CouplingDeck>,
+    /// Small-sliding contact between deformable parts (the paper's §3.7).
+    #[serde(default)]
+    pub pairs: Vec<super::pairs::PairsDeck>,
     /// How the elements are split over ranks (default METIS).
     #[serde(default)]
     pub partition: Option<PartitionDeck>,

@@ -7,6 +7,7 @@ pub mod build;
 pub mod coupling;
 pub mod deck;
 mod dynamics;
+pub mod pairs;
 pub mod walls;
 
 use crate::model::def::ModelDef;

@@ -1,0 +1,538 @@
+//! One small-sliding contact pair (paper §3.7, LS-DYNA's
+//! `*CONTACT_CONSTRAINT_SURFACE_TO_SURFACE`, Abaqus' small sliding): a tracked node s
+//! paired once, at the start, with the point ξ of a reference face (quad4 or tri3) of
+//! another part. The pair's local coordinates never change; what is measured in the
+//! current configuration is d = x_s − x_m, x_m = Σ N_a(ξ) x_a, in the face's frame
+//! [n, t1, t2] at ξ (n = a1 × a2 / |a1 × a2|, outward from the reference part; t1 along
+//! a1 = ∂x/∂ξ; t2 = n × t1).
+//!
+//! The gaps handed to the contact law (the walls' [`super::law`], unchanged) are
+//! g = (n · (d − c_N), t1 · (d − c_T), t2 · (d − c_T)): for contact c_N = 0 and c_T = d at
+//! the start of the step (the slip over the step); for a tied pair c_N = c_T = d₀ (the
+//! initial offset, so a tie holds the parts where they are). The force on the node is
+//! f = P f_loc, P = [n t1 t2]; the face nodes get −N_a f. The Jacobian is exact: the
+//! law's generalized derivative with the frame's and the gaps' derivatives by the face
+//! nodes (δn = (I − n nᵀ) δ(a1 × a2) / |a1 × a2|, δt1 = (I − t1 t1ᵀ) δa1 / |a1|,
+//! δt2 = δn × t1 + n × δt1).
+
+// Index loops over 3×3 frames read like the formulas.
+#![allow(clippy::needless_range_loop)]
+
+use super::law::{alm_law, penalty, AlmLaw, Branch, Decision};
+
+type M3 = [[f64; 3]; 3];
+
+/// Shape functions of a reference face at ξ and their derivatives (3 or 4 nodes, in
+/// [`crate::mesh::ElemKind::faces`] order: quad4 counter-clockwise from (−1, −1); tri3
+/// with N = (1 − ξ − η, ξ, η)).
+pub fn face_shape(n_nodes: usize, xi: [f64; 2]) -> (Vec<f64>, Vec<[f64; 2]>) {
+    let (s, t) = (xi[0], xi[1]);
+    if n_nodes == 3 {
+        (
+            vec![1.0 - s - t, s, t],
+            vec![[-1.0, -1.0], [1.0, 0.0], [0.0, 1.0]],
+        )
+    } else {
+        let c = [[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]];
+        (
+            c.iter()
+                .map(|p| 0.25 * (1.0 + p[0] * s) * (1.0 + p[1] * t))
+                .collect(),
+            c.iter()
+                .map(|p| {
+                    [
+                        0.25 * p[0] * (1.0 + p[1] * t),
+                        0.25 * p[1] * (1.0 + p[0] * s),
+                    ]
+                })
+                .collect(),
+        )
+    }
+}
+
+/// Whether ξ lies on the face (within `tol` in its parameters).
+pub fn on_face(n_nodes: usize, xi: [f64; 2], tol: f64) -> bool {
+    if n_nodes == 3 {
+        xi[0] >= -tol && xi[1] >= -tol && xi[0] + xi[1] <= 1.0 + tol
+    } else {
+        xi[0].abs() <= 1.0 + tol && xi[1].abs() <= 1.0 + tol
+    }
+}
+
+fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
+fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+fn norm(a: [f64; 3]) -> f64 {
+    dot(a, a).sqrt()
+}
+fn skew(a: [f64; 3]) -> M3 {
+    [[0.0, -a[2], a[1]], [a[2], 0.0, -a[0]], [-a[1], a[0], 0.0]]
+}
+fn mm(a: &M3, b: &M3) -> M3 {
+    std::array::from_fn(|i| std::array::from_fn(|j| (0..3).map(|k| a[i][k] * b[k][j]).sum()))
+}
+fn projector(v: [f64; 3], scale: f64) -> M3 {
+    std::array::from_fn(|i| {
+        std::array::from_fn(|j| ((if i == j { 1.0 } else { 0.0 }) - v[i] * v[j]) * scale)
+    })
+}
+
+/// The closest point of x on a face (its nodes' positions `xa`): ξ by Newton on
+/// min |x − x(ξ)|² from the centre (Gauss–Newton with the exact second term for the
+/// bilinear quad), and the distance. None if Newton does not settle (a degenerate face).
+pub fn project_on_face(x: [f64; 3], xa: &[[f64; 3]]) -> Option<([f64; 2], f64)> {
+    let nf = xa.len();
+    let mut xi = if nf == 3 { [1.0 / 3.0; 2] } else { [0.0; 2] };
+    for _ in 0..50 {
+        let (n, dn) = face_shape(nf, xi);
+        let mut p = [0.0; 3];
+        let mut a = [[0.0; 3]; 2];
+        for k in 0..nf {
+            for c in 0..3 {
+                p[c] += n[k] * xa[k][c];
+                a[0][c] += dn[k][0] * xa[k][c];
+                a[1][c] += dn[k][1] * xa[k][c];
+            }
+        }
+        let r = [x[0] - p[0], x[1] - p[1], x[2] - p[2]];
+        // ∂²x/∂ξ∂η of the bilinear quad (zero on a triangle).
+        let mut a12 = [0.0; 3];
+        if nf == 4 {
+            let c = [1.0, -1.0, 1.0, -1.0];
+            for k in 0..4 {
+                for d in 0..3 {
+                    a12[d] += 0.25 * c[k] * xa[k][d];
+                }
+            }
+        }
+        let g = [dot(a[0], r), dot(a[1], r)];
+        let h = [
+            [dot(a[0], a[0]), dot(a[0], a[1]) - dot(a12, r)],
+            [dot(a[1], a[0]) - dot(a12, r), dot(a[1], a[1])],
+        ];
+        let det = h[0][0] * h[1][1] - h[0][1] * h[1][0];
+        if det.abs() <= 1e-300 {
+            return None;
+        }
+        let dxi = [
+            (h[1][1] * g[0] - h[0][1] * g[1]) / det,
+            (h[0][0] * g[1] - h[1][0] * g[0]) / det,
+        ];
+        xi = [xi[0] + dxi[0], xi[1] + dxi[1]];
+        if dxi[0].abs() + dxi[1].abs() < 1e-14 {
+            let (n, _) = face_shape(nf, xi);
+            let mut p = [0.0; 3];
+            for k in 0..nf {
+                for c in 0..3 {
+                    p[c] += n[k] * xa[k][c];
+                }
+            }
+            return Some((xi, norm([x[0] - p[0], x[1] - p[1], x[2] - p[2]])));
+        }
+    }
+    None
+}
+
+/// How a pair is enforced.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum PairLaw {
+    /// The paper's augmented Lagrangian (multipliers λ, scale κ).
+    Alm { law: AlmLaw, kappa: f64 },
+    /// Penalty normal stiffness and regularized Coulomb (`ft_old`: the tangential
+    /// force carried from the last step, global).
+    Penalty { kp: f64, mu: f64, ft_old: [f64; 3] },
+    /// Bonded in all directions: h = g with multipliers.
+    TiedAlm { kappa: f64 },
+    /// Bonded by a penalty spring f = −k_p g.
+    TiedPenalty { kp: f64 },
+}
+
+impl PairLaw {
+    pub fn has_multipliers(&self) -> bool {
+        matches!(self, PairLaw::Alm { .. } | PairLaw::TiedAlm { .. })
+    }
+}
+
+/// A pair's evaluation: the residual rows of its node, the face nodes and (with
+/// multipliers) its multiplier block, and their dense Jacobian (row-major, the same
+/// order), with what it reports.
+#[derive(Debug, Clone)]
+pub struct PairEval {
+    pub r: Vec<f64>,
+    pub k: Vec<f64>,
+    /// Normal gap n · (d − c_N).
+    pub gap: f64,
+    /// Force on the tracked node (global) and its normal component.
+    pub force: [f64; 3],
+    pub normal_force: f64,
+    pub active: bool,
+    pub sticking: bool,
+    pub branch: Branch,
+    pub cone_excess: f64,
+    /// Penalty: the tangential force to carry to the next step (global).
+    pub ft_new: [f64; 3],
+    /// d = x_s − x_m now.
+    pub d: [f64; 3],
+    /// The frame [n, t1, t2] now (rows).
+    pub frame: [[f64; 3]; 3],
+}
+
+/// Jacobian-only diagonal on multiplier rows (relative to κ), as for walls: keeps a
+/// stick row whose node is held by a support regular.
+const JACOBIAN_REG: f64 = 1e-8;
+
+/// Evaluate one pair: `x[0]` the tracked node, `x[1..]` the face's nodes (current
+/// positions); `lam` its multipliers (ignored without); `c_n`, `c_t` the gap offsets
+/// (see the module docs); `decision` the law's branch choice.
+pub fn evaluate(
+    x: &[[f64; 3]],
+    xi: [f64; 2],
+    lam: [f64; 3],
+    c_n: [f64; 3],
+    c_t: [f64; 3],
+    law: &PairLaw,
+    decision: Decision,
+) -> PairEval {
+    let nf = x.len() - 1;
+    let (nn, dn) = face_shape(nf, xi);
+    let mut xm = [0.0; 3];
+    let mut a1 = [0.0; 3];
+    let mut a2 = [0.0; 3];
+    for k in 0..nf {
+        for c in 0..3 {
+            xm[c] += nn[k] * x[1 + k][c];
+            a1[c] += dn[k][0] * x[1 + k][c];
+            a2[c] += dn[k][1] * x[1 + k][c];
+        }
+    }
+    let d = [x[0][0] - xm[0], x[0][1] - xm[1], x[0][2] - xm[2]];
+    let a = cross(a1, a2);
+    let (la, l1) = (norm(a), norm(a1));
+    let n = [a[0] / la, a[1] / la, a[2] / la];
+    let t1 = [a1[0] / l1, a1[1] / l1, a1[2] / l1];
+    let t2 = cross(n, t1);
+    let cols = [n, t1, t2];
+    let e = [
+        [d[0] - c_n[0], d[1] - c_n[1], d[2] - c_n[2]],
+        [d[0] - c_t[0], d[1] - c_t[1], d[2] - c_t[2]],
+        [d[0] - c_t[0], d[1] - c_t[1], d[2] - c_t[2]],
+    ];
+    let g = [dot(n, e[0]), dot(t1, e[1]), dot(t2, e[2])];
+
+    // The law: local force fl on the node, ∂fl/∂g, ∂fl/∂λ, and the multiplier rows.
+    let mult = law.has_multipliers();
+    let mut fl = [0.0; 3];
+    let mut dfdg = [[0.0; 3]; 3];
+    let mut dfdl = [[0.0; 3]; 3];
+    let mut r_l = [0.0; 3];
+    let mut k_lg = [[0.0; 3]; 3];
+    let mut k_ll = [[0.0; 3]; 3];
+    let (mut active, mut sticking, mut branch, mut cone_excess) =
+        (true, true, Branch::default(), f64::NEG_INFINITY);
+    let mut ft_new = [0.0; 3];
+    match *law {
+        PairLaw::Alm { law, kappa } => {
+            let p = alm_law(g, lam, &law, decision);
+            (active, sticking, branch, cone_excess) = (p.active, p.sticking, p.branch, p.cone_excess);
+            for i in 0..3 {
+                fl[i] = kappa * (lam[i] - p.h[i]);
+                r_l[i] = -kappa * p.h[i];
+                for k in 0..3 {
+                    let id = if i == k { 1.0 } else { 0.0 };
+                    dfdg[i][k] = -kappa * p.dh_dg[i][k];
+                    dfdl[i][k] = kappa * (id - p.dh_dl[i][k]);
+                    k_lg[i][k] = -kappa * p.dh_dg[i][k];
+                    k_ll[i][k] = -kappa * (p.dh_dl[i][k] + id * JACOBIAN_REG);
+                }
+            }
+        }
+        PairLaw::TiedAlm { kappa } => {
+            for i in 0..3 {
+                fl[i] = kappa * (lam[i] - g[i]);
+                r_l[i] = -kappa * g[i];
+                dfdg[i][i] = -kappa;
+                dfdl[i][i] = kappa;
+                k_lg[i][i] = -kappa;
+                k_ll[i][i] = -kappa * JACOBIAN_REG;
+            }
+        }
+        PairLaw::Penalty { kp, mu, ft_old } => {
+            let fo = [dot(t1, ft_old), dot(t2, ft_old)];
+            let p = penalty(g, fo, kp, kp, mu);
+            (active, sticking) = (p.active, p.sticking);
+            fl = p.f;
+            dfdg = p.df_dg;
+            for c in 0..3 {
+                ft_new[c] = t1[c] * fl[1] + t2[c] * fl[2];
+            }
+        }
+        PairLaw::TiedPenalty { kp } => {
+            for i in 0..3 {
+                fl[i] = -kp * g[i];
+                dfdg[i][i] = -kp;
+            }
+        }
+    }
+    let f: [f64; 3] = std::array::from_fn(|i| (0..3).map(|k| cols[k][i] * fl[k]).sum());
+
+    // Derivatives of d and the frame columns by each position node: node 0 is the
+    // tracked node (∂d = I, frame unchanged), node 1 + a a face node (∂d = −N_a I).
+    let np = 1 + nf;
+    let nr = 3 * np + if mult { 3 } else { 0 };
+    let mut k = vec![0.0; nr * nr];
+    let pn = projector(n, 1.0 / la);
+    let p1 = projector(t1, 1.0 / l1);
+    let (s1, s2, st1, sn) = (skew(a1), skew(a2), skew(t1), skew(n));
+    for q in 0..np {
+        let (dd, dcols): (f64, [M3; 3]) = if q == 0 {
+            (1.0, [[[0.0; 3]; 3]; 3])
+        } else {
+            let (na_xi, na_eta) = (dn[q - 1][0], dn[q - 1][1]);
+            // δa = δa1 × a2 + a1 × δa2 = (−N_a,ξ [a2]ₓ + N_a,η [a1]ₓ) v.
+            let da: M3 = std::array::from_fn(|i| {
+                std::array::from_fn(|j| -na_xi * s2[i][j] + na_eta * s1[i][j])
+            });
+            let d_n = mm(&pn, &da);
+            let d_t1: M3 = std::array::from_fn(|i| std::array::from_fn(|j| p1[i][j] * na_xi));
+            let a = mm(&st1, &d_n);
+            let b = mm(&sn, &d_t1);
+            let d_t2: M3 = std::array::from_fn(|i| std::array::from_fn(|j| b[i][j] - a[i][j]));
+            (-nn[q - 1], [d_n, d_t1, d_t2])
+        };
+        // ∂g_k/∂x_q = e_kᵀ ∂P_k + dd P_kᵀ.
+        let dg: M3 = std::array::from_fn(|kk| {
+            std::array::from_fn(|j| {
+                (0..3).map(|i| e[kk][i] * dcols[kk][i][j]).sum::<f64>() + dd * cols[kk][j]
+            })
+        });
+        // ∂f/∂x_q = Σ_k ∂P_k fl_k + P ∂fl/∂x_q, ∂fl/∂x_q = ∂fl/∂g ∂g/∂x_q (and for
+        // penalty, the carried force's projection on the turning tangents: ∂f_T/∂f_o =
+        // −(∂f_T/∂g_T)/k_T, both in stick and in slip).
+        let mut dfl: M3 = mm(&dfdg, &dg);
+        if let PairLaw::Penalty { kp, ft_old, .. } = *law {
+            for i in 0..2 {
+                for kk in 0..2 {
+                    let w = -dfdg[1 + i][1 + kk] / kp;
+                    for j in 0..3 {
+                        dfl[1 + i][j] +=
+                            w * (0..3).map(|c| ft_old[c] * dcols[1 + kk][c][j]).sum::<f64>();
+                    }
+                }
+            }
+        }
+        let df: M3 = std::array::from_fn(|i| {
+            std::array::from_fn(|j| {
+                (0..3)
+                    .map(|kk| dcols[kk][i][j] * fl[kk] + cols[kk][i] * dfl[kk][j])
+                    .sum()
+            })
+        });
+        // Rows: r_s = −f, r_a = N_a f, r_λ = ∂(−κ h) = k_lg ∂g.
+        for row in 0..np {
+            let w = if row == 0 { -1.0 } else { nn[row - 1] };
+            for i in 0..3 {
+                for j in 0..3 {
+                    k[(3 * row + i) * nr + 3 * q + j] += w * df[i][j];
+                }
+            }
+        }
+        if mult {
+            let dl = mm(&k_lg, &dg);
+            for i in 0..3 {
+                for j in 0..3 {
+                    k[(3 * np + i) * nr + 3 * q + j] += dl[i][j];
+                }
+            }
+        }
+    }
+    if mult {
+        // ∂f/∂λ = P ∂fl/∂λ.
+        let dfl: M3 = std::array::from_fn(|i| {
+            std::array::from_fn(|j| (0..3).map(|kk| cols[kk][i] * dfdl[kk][j]).sum())
+        });
+        for row in 0..np {
+            let w = if row == 0 { -1.0 } else { nn[row - 1] };
+            for i in 0..3 {
+                for j in 0..3 {
+                    k[(3 * row + i) * nr + 3 * np + j] += w * dfl[i][j];
+                }
+            }
+        }
+        for i in 0..3 {
+            for j in 0..3 {
+                k[(3 * np + i) * nr + 3 * np + j] += k_ll[i][j];
+            }
+        }
+    }
+    let mut r = vec![0.0; nr];
+    for i in 0..3 {
+        r[i] = -f[i];
+        for a in 0..nf {
+            r[3 * (1 + a) + i] = nn[a] * f[i];
+        }
+        if mult {
+            r[3 * np + i] = r_l[i];
+        }
+    }
+    PairEval {
+        r,
+        k,
+        gap: g[0],
+        force: f,
+        normal_force: fl[0],
+        active,
+        sticking,
+        branch,
+        cone_excess,
+        ft_new,
+        d,
+        frame: cols,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::contact::law::{Tangential, Threshold};
+
+    /// A slanted, warped quad and a tracked node near it, every law: the Jacobian
+    /// against central differences of the residual on the branch of the base point.
+    #[test]
+    fn jacobian_matches_central_differences() {
+        let face = [
+            [0.0, 0.0, 0.0],
+            [1.1, 0.1, 0.05],
+            [1.0, 0.9, -0.1],
+            [-0.1, 1.0, 0.02],
+        ];
+        let tri = [[0.0, 0.0, 0.0], [1.1, 0.1, 0.05], [0.1, 1.0, -0.1]];
+        let alm = AlmLaw {
+            mu: 0.3,
+            alpha: 1.0,
+            threshold: Threshold::Multiplier,
+        };
+        let laws = [
+            PairLaw::Alm {
+                law: alm,
+                kappa: 7.0,
+            },
+            PairLaw::Penalty {
+                kp: 50.0,
+                mu: 0.3,
+                ft_old: [0.2, -0.1, 0.05],
+            },
+            PairLaw::TiedAlm { kappa: 3.0 },
+            PairLaw::TiedPenalty { kp: 20.0 },
+        ];
+        // (node, λ): stick, slip, separated.
+        let cases = [
+            ([0.45, 0.4, -0.02], [0.5, 0.01, -0.02]),
+            ([0.45, 0.4, -0.02], [0.5, 0.4, -0.3]),
+            ([0.45, 0.4, 0.03], [-0.1, 0.0, 0.0]),
+        ];
+        let c_t = [0.01, -0.02, 0.0];
+        let mut branches = std::collections::BTreeSet::new();
+        for nodes in [&face[..], &tri[..]] {
+            let xi = if nodes.len() == 3 { [0.3, 0.35] } else { [-0.1, 0.2] };
+            for law in &laws {
+                for (xs, lam) in cases {
+                    let mut x = vec![xs];
+                    x.extend_from_slice(nodes);
+                    let base = evaluate(&x, xi, lam, [0.0; 3], c_t, law, Decision::Natural);
+                    branches.insert(format!("{:?}", base.branch));
+                    let forced = Decision::Forced(base.branch);
+                    let nr = base.r.len();
+                    let np = x.len();
+                    let h = 1e-6;
+                    let mut worst = 0.0f64;
+                    let scale = base.k.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+                    for j in 0..nr {
+                        let at = |s: f64| {
+                            let (mut y, mut l) = (x.clone(), lam);
+                            if j < 3 * np {
+                                y[j / 3][j % 3] += s * h;
+                            } else {
+                                l[j - 3 * np] += s * h;
+                            }
+                            evaluate(&y, xi, l, [0.0; 3], c_t, law, forced).r
+                        };
+                        let (rp, rm) = (at(1.0), at(-1.0));
+                        for i in 0..nr {
+                            let fd = (rp[i] - rm[i]) / (2.0 * h);
+                            worst = worst.max((fd - base.k[i * nr + j]).abs());
+                        }
+                    }
+                    assert!(
+                        worst <= 1e-7 * scale.max(1.0),
+                        "{law:?} at {xs:?}, {} nodes: off by {worst:e} (scale {scale:e})",
+                        nodes.len()
+                    );
+                }
+            }
+        }
+        // The cases reach stick, slip and separation of the ALM law.
+        for t in [Tangential::Stick, Tangential::Slip] {
+            assert!(
+                branches.iter().any(|b| b.contains(&format!("{t:?}"))),
+                "{branches:?}"
+            );
+        }
+    }
+
+    /// A node's residual and its face nodes' are equal and opposite in sum (the pair
+    /// exerts no net force), the gap is the distance along the normal, and the closest
+    /// point search finds ξ back.
+    #[test]
+    fn forces_balance_and_projection_finds_xi() {
+        let face = [
+            [0.0, 0.0, 0.0],
+            [2.0, 0.0, 0.0],
+            [2.0, 1.0, 0.3],
+            [0.0, 1.0, 0.0],
+        ];
+        let xi = [0.25, -0.4];
+        let (n, _) = face_shape(4, xi);
+        let xm: [f64; 3] =
+            std::array::from_fn(|c| (0..4).map(|k| n[k] * face[k][c]).sum());
+        let e = evaluate(
+            &[[xm[0], xm[1], xm[2]], face[0], face[1], face[2], face[3]],
+            xi,
+            [0.0; 3],
+            [0.0; 3],
+            [0.0; 3],
+            &PairLaw::TiedPenalty { kp: 1.0 },
+            Decision::Natural,
+        );
+        assert!(e.gap.abs() < 1e-15);
+        let x = [xm[0] + 0.01, xm[1] - 0.02, xm[2] + 0.05];
+        let (found, dist) = project_on_face(x, &face).unwrap();
+        let ev = evaluate(
+            &[x, face[0], face[1], face[2], face[3]],
+            found,
+            [0.0; 3],
+            [0.0; 3],
+            [0.0; 3],
+            &PairLaw::Penalty {
+                kp: 10.0,
+                mu: 0.0,
+                ft_old: [0.0; 3],
+            },
+            Decision::Natural,
+        );
+        // The closest point: x − x_m is along n, and the gap is the distance.
+        assert!((ev.gap.abs() - dist).abs() < 1e-12, "{} vs {dist}", ev.gap);
+        for c in 0..3 {
+            let s: f64 = (0..5).map(|a| ev.r[3 * a + c]).sum();
+            assert!(s.abs() < 1e-14, "net force {s}");
+        }
+        assert!(on_face(4, found, 0.0));
+        assert!(!on_face(3, [0.6, 0.5], 1e-9));
+    }
+}

@@ -1,0 +1,472 @@
+//! Small-sliding contact between deformable parts (paper §3.7): a `[[pairs]]` entry is a
+//! list of pairs, each a tracked node paired once with a point on a reference face of
+//! another part ([`crate::contact::pair`] evaluates one). Each pair is a stencil (the
+//! node and the face's nodes), evaluated on the rank that owns the node, which also
+//! owns its multipliers; the face's nodes are ghosts there where another rank owns
+//! them, and their rows are sent to their owners by the matrix and the residual sum.
+
+// Index loops over small blocks read like the formulas.
+#![allow(clippy::needless_range_loop)]
+
+use super::contribution::{
+    Center, Column, Combine, Contribution, Evaluation, FieldSpec, Reduce, Reference, State,
+    SummaryEntry,
+};
+use super::dofs::{DofMap, Unknowns};
+use super::kind::{ContributionKind, Localizer};
+use super::local::{LocalElements, LocalMesh};
+use crate::contact::law::{AlmLaw, Branch, Decision, Threshold};
+use crate::contact::pair::{evaluate, PairLaw};
+use crate::contact::wall::ContactMethod;
+use serde::{Deserialize, Serialize};
+
+/// One pair: the tracked node, the reference face's nodes (3 or 4, outward order) and
+/// the point's parameters on it, with the node's tributary area (0 where unknown).
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+pub struct Pair {
+    pub node: usize,
+    pub face: Vec<usize>,
+    pub xi: [f64; 2],
+    pub area: f64,
+}
+
+/// What the deck says about a list of pairs, with the pairs found at the start.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct PairsDef {
+    pub name: String,
+    pub method: ContactMethod,
+    /// Bonded in all directions (no separation, no slip).
+    pub tied: bool,
+    pub friction: f64,
+    pub kappa: Option<f64>,
+    pub penalty_scale: f64,
+    pub tangential_augmentation: f64,
+    pub friction_threshold: Threshold,
+    /// The deck's tracked and reference surface names (for messages).
+    pub tracked: String,
+    pub reference: String,
+    pub pairs: Vec<Pair>,
+    /// Tracked nodes left without a pair (no reference face within reach).
+    pub unpaired: usize,
+}
+
+impl ContributionKind for PairsDef {
+    fn kind_name(&self) -> &'static str {
+        "pairs"
+    }
+    fn name(&self) -> &str {
+        &self.name
+    }
+    fn describe(&self) -> String {
+        format!(
+            "pairs {}: {}{}, μ = {}, {} tracked nodes of {} paired with faces of {}{}",
+            self.name,
+            self.method.name(),
+            if self.tied { " tied" } else { "" },
+            self.friction,
+            self.pairs.len(),
+            self.tracked,
+            self.reference,
+            if self.unpaired > 0 {
+                format!(" ({} left without a face in reach)", self.unpaired)
+            } else {
+                String::new()
+            }
+        )
+    }
+    fn nodes(&self) -> Vec<usize> {
+        self.pairs.iter().map(|p| p.node).collect()
+    }
+    fn extra_unknowns(&self) -> usize {
+        if self.method == ContactMethod::Alm {
+            3 * self.pairs.len()
+        } else {
+            0
+        }
+    }
+    fn stencils(&self) -> Vec<Vec<usize>> {
+        self.pairs
+            .iter()
+            .map(|p| std::iter::once(p.node).chain(p.face.iter().copied()).collect())
+            .collect()
+    }
+    /// The pairs whose tracked node this rank owns, in local node numbers (the face's
+    /// nodes are local here: the stencil made them ghosts where owned elsewhere).
+    fn localize(&self, l: &Localizer) -> Self {
+        let mut mine: Vec<Pair> = self
+            .pairs
+            .iter()
+            .filter_map(|p| {
+                l.owned(p.node).map(|node| Pair {
+                    node,
+                    face: p.face.iter().map(|&n| l.local_of[n]).collect(),
+                    xi: p.xi,
+                    area: p.area,
+                })
+            })
+            .collect();
+        mine.sort_by_key(|p| p.node);
+        Self {
+            pairs: mine,
+            ..self.clone()
+        }
+    }
+    fn build(&self, _mesh: &LocalMesh, _elements: &LocalElements) -> Box<dyn Contribution> {
+        Box::new(Pairs::new(self.clone()))
+    }
+    fn explicit_ok(&self) -> Result<(), String> {
+        Err(format!(
+            "pairs `{}`: small-sliding pairs take part in static analyses and implicit dynamics",
+            self.name
+        ))
+    }
+    fn set_contact_method(&mut self, m: ContactMethod) {
+        self.method = m;
+    }
+}
+
+/// What one pair did at the last evaluation.
+#[derive(Debug, Clone, Copy, Default)]
+struct PairState {
+    gap: f64,
+    force: [f64; 3],
+    normal_force: f64,
+    /// |tangential part of d − d₀|: how far the node slid on its face since the start.
+    slip: f64,
+    active: bool,
+    sticking: bool,
+    branch: Branch,
+}
+
+/// One `[[pairs]]` entry on this rank (the pairs of its owned tracked nodes).
+#[derive(Debug)]
+pub struct Pairs {
+    def: PairsDef,
+    /// Local block of the first multiplier (ALM).
+    mult: Option<usize>,
+    kappa: Vec<f64>,
+    k_node: Vec<f64>,
+    /// d = x_s − x_m of each pair at the start (the tie's offset), at the start of the
+    /// step and at the last evaluation.
+    d0: Vec<[f64; 3]>,
+    d_old: Vec<[f64; 3]>,
+    d_new: Vec<[f64; 3]>,
+    /// Penalty's tangential force carried over steps (global).
+    ft_old: Vec<[f64; 3]>,
+    ft_new: Vec<[f64; 3]>,
+    last: Vec<PairState>,
+    started: bool,
+}
+
+impl Pairs {
+    pub fn new(def: PairsDef) -> Self {
+        let n = def.pairs.len();
+        Self {
+            mult: None,
+            kappa: vec![def.kappa.unwrap_or(1.0); n],
+            k_node: vec![1.0; n],
+            d0: vec![[0.0; 3]; n],
+            d_old: vec![[0.0; 3]; n],
+            d_new: vec![[0.0; 3]; n],
+            ft_old: vec![[0.0; 3]; n],
+            ft_new: vec![[0.0; 3]; n],
+            last: vec![PairState::default(); n],
+            started: false,
+            def,
+        }
+    }
+
+    fn is_alm(&self) -> bool {
+        self.def.method == ContactMethod::Alm
+    }
+
+    fn law(&self, j: usize) -> PairLaw {
+        let kp = self.def.penalty_scale * self.k_node[j];
+        match (self.def.method, self.def.tied) {
+            (ContactMethod::Alm, false) => PairLaw::Alm {
+                law: AlmLaw {
+                    mu: self.def.friction,
+                    alpha: self.def.tangential_augmentation,
+                    threshold: self.def.friction_threshold,
+                },
+                kappa: self.kappa[j],
+            },
+            (ContactMethod::Alm, true) => PairLaw::TiedAlm {
+                kappa: self.kappa[j],
+            },
+            (ContactMethod::Penalty, false) => PairLaw::Penalty {
+                kp,
+                mu: self.def.friction,
+                ft_old: self.ft_old[j],
+            },
+            (ContactMethod::Penalty, true) => PairLaw::TiedPenalty { kp },
+        }
+    }
+
+    /// The pair's node then face positions.
+    fn positions(&self, j: usize, coords: &[[f64; 3]], u: &[f64]) -> Vec<[f64; 3]> {
+        let p = &self.def.pairs[j];
+        std::iter::once(p.node)
+            .chain(p.face.iter().copied())
+            .map(|n| std::array::from_fn(|c| coords[n][c] + u[3 * n + c]))
+            .collect()
+    }
+
+    /// d at the reference configuration (u = 0) of every pair.
+    fn start(&mut self, coords: &[[f64; 3]]) {
+        let zero = vec![0.0; 3 * coords.len()];
+        for j in 0..self.def.pairs.len() {
+            let x = self.positions(j, coords, &zero);
+            let e = evaluate(
+                &x,
+                self.def.pairs[j].xi,
+                [0.0; 3],
+                [0.0; 3],
+                [0.0; 3],
+                &PairLaw::TiedPenalty { kp: 0.0 },
+                Decision::Natural,
+            );
+            self.d0[j] = e.d;
+            self.d_old[j] = e.d;
+            self.d_new[j] = e.d;
+        }
+        self.started = true;
+    }
+}
+
+/// Column layout: force on the tracked side (3), active pairs, largest slip, then the
+/// shared ones.
+const N_OWN_COLUMNS: usize = 5;
+
+impl Contribution for Pairs {
+    fn name(&self) -> &str {
+        &self.def.name
+    }
+    /// ALM (tied or not): three multipliers per pair, owned with its tracked node.
+    fn unknowns(&self) -> Unknowns {
+        Unknowns {
+            owned: if self.is_alm() {
+                self.def.pairs.len()
+            } else {
+                0
+            },
+            ..Unknowns::default()
+        }
+    }
+    fn bind(&mut self, dofs: &DofMap, index: usize) {
+        if self.is_alm() {
+            self.mult = Some(dofs.placed(index).owned_local);
+        }
+    }
+    fn pattern(&self, dofs: &DofMap, out: &mut Vec<(usize, usize)>) {
+        for (j, p) in self.def.pairs.iter().enumerate() {
+            let mut blocks: Vec<usize> = std::iter::once(p.node)
+                .chain(p.face.iter().copied())
+                .map(|n| dofs.global_block(n))
+                .collect();
+            if let Some(m0) = self.mult {
+                blocks.push(dofs.global_block(m0 + j));
+            }
+            for &a in &blocks {
+                for &b in &blocks {
+                    out.push((a, b));
+                }
+            }
+        }
+    }
+
+    fn wants_reference(&self) -> bool {
+        !self.def.pairs.is_empty()
+    }
+    /// κ and the penalty stiffness from the tracked node's stiffness, as for walls (see
+    /// [`super::walls`]): κ scaled from the P-wave modulus down to Young's modulus.
+    fn setup(&mut self, r: &Reference) {
+        for (j, p) in self.def.pairs.iter().enumerate() {
+            let (d, f) = (r.k_diag[p.node], r.e_factor[p.node]);
+            self.k_node[j] = d.max(f64::MIN_POSITIVE);
+            if self.def.kappa.is_none() {
+                self.kappa[j] = (f * d).max(f64::MIN_POSITIVE);
+            }
+        }
+    }
+
+    /// The tracked nodes' forces count as external, the face nodes' reactions too (the
+    /// pair exerts no net force); multiplier rows (−κ h) go with the internal forces.
+    fn evaluate(&mut self, ev: &mut Evaluation) -> Result<(), String> {
+        if !self.started {
+            self.start(ev.coords);
+        }
+        for j in 0..self.def.pairs.len() {
+            let x = self.positions(j, ev.coords, ev.u);
+            let lam = match self.mult {
+                Some(m0) => {
+                    let b = 3 * (m0 + j);
+                    [ev.u[b], ev.u[b + 1], ev.u[b + 2]]
+                }
+                None => [0.0; 3],
+            };
+            let (c_n, c_t) = if self.def.tied {
+                (self.d0[j], self.d0[j])
+            } else {
+                ([0.0; 3], self.d_old[j])
+            };
+            let decision = if ev.frozen {
+                Decision::Forced(self.last[j].branch)
+            } else {
+                Decision::Natural
+            };
+            let law = self.law(j);
+            let e = evaluate(&x, self.def.pairs[j].xi, lam, c_n, c_t, &law, decision);
+            let p = &self.def.pairs[j];
+            let nodes: Vec<usize> = std::iter::once(p.node).chain(p.face.iter().copied()).collect();
+            let np = nodes.len();
+            if let Some((f_int, f_ext)) = ev.forces.as_mut() {
+                for (q, &n) in nodes.iter().enumerate() {
+                    for c in 0..3 {
+                        f_ext[3 * n + c] -= e.r[3 * q + c];
+                    }
+                }
+                if let Some(m0) = self.mult {
+                    for c in 0..3 {
+                        f_int[3 * (m0 + j) + c] += e.r[3 * np + c];
+                    }
+                }
+            }
+            if let Some(k) = ev.jacobian.as_deref_mut() {
+                let mut blocks: Vec<usize> = nodes.iter().map(|&n| ev.dofs.global_block(n)).collect();
+                if let Some(m0) = self.mult {
+                    blocks.push(ev.dofs.global_block(m0 + j));
+                }
+                let nr = 3 * blocks.len();
+                for (bi, &a) in blocks.iter().enumerate() {
+                    for (bj, &b) in blocks.iter().enumerate() {
+                        let blk: [f64; 9] = std::array::from_fn(|t| {
+                            e.k[(3 * bi + t / 3) * nr + 3 * bj + t % 3]
+                        });
+                        k.add_block(a, b, &blk);
+                    }
+                }
+            }
+            if ev.frozen {
+                continue;
+            }
+            self.d_new[j] = e.d;
+            self.ft_new[j] = e.ft_new;
+            self.last[j] = PairState {
+                gap: e.gap,
+                force: e.force,
+                normal_force: e.normal_force,
+                slip: {
+                    let s: [f64; 3] = std::array::from_fn(|c| e.d[c] - self.d0[j][c]);
+                    let [_, t1, t2] = e.frame;
+                    let dot = |a: [f64; 3]| a[0] * s[0] + a[1] * s[1] + a[2] * s[2];
+                    dot(t1).hypot(dot(t2))
+                },
+                active: e.active,
+                sticking: e.sticking,
+                branch: e.branch,
+            };
+        }
+        Ok(())
+    }
+
+    fn commit(&mut self) {
+        self.d_old.copy_from_slice(&self.d_new);
+        self.ft_old.copy_from_slice(&self.ft_new);
+    }
+
+    /// `<pairs>.fx/.fy/.fz`: the force on the tracked side (its reaction on the
+    /// reference side is opposite), `<pairs>.active`, `<pairs>.max_slip` (the largest
+    /// tangential relative displacement since the start), and the shared `max_penetration`,
+    /// `contact_active` and `contact_sticking` (tied pairs count as active and
+    /// sticking).
+    fn columns(&self) -> Vec<Column> {
+        let w = &self.def.name;
+        let mut c: Vec<Column> = ["fx", "fy", "fz"]
+            .iter()
+            .map(|s| Column::sum(format!("{w}.{s}")))
+            .collect();
+        c.push(Column {
+            count: true,
+            ..Column::sum(format!("{w}.active"))
+        });
+        c.push(Column {
+            reduce: Reduce::Max,
+            run_max: true,
+            ..Column::sum(format!("{w}.max_slip"))
+        });
+        c.push(Column {
+            reduce: Reduce::Max,
+            shared: true,
+            run_max: true,
+            ..Column::sum("max_penetration")
+        });
+        for name in ["contact_active", "contact_sticking"] {
+            c.push(Column {
+                shared: true,
+                count: true,
+                ..Column::sum(name)
+            });
+        }
+        c
+    }
+    fn column_values(&self, _s: &State, out: &mut [f64]) {
+        for p in &self.last {
+            for i in 0..3 {
+                out[i] += p.force[i];
+            }
+            out[4] = out[4].max(p.slip);
+            if p.active {
+                out[3] += 1.0;
+                out[N_OWN_COLUMNS + 1] += 1.0;
+            }
+            if !self.def.tied && p.gap < 0.0 {
+                out[N_OWN_COLUMNS] = out[N_OWN_COLUMNS].max(-p.gap);
+            }
+            if p.sticking {
+                out[N_OWN_COLUMNS + 2] += 1.0;
+            }
+        }
+    }
+    fn summary(&self, values: &[f64]) -> Option<SummaryEntry> {
+        Some((
+            "pairs",
+            self.def.name.clone(),
+            serde_json::json!({
+                "force": [values[0], values[1], values[2]],
+                "active": values[3],
+                "max_slip": values[4],
+                "pairs": self.def.pairs.len(),
+            }),
+        ))
+    }
+
+    /// On the tracked nodes: the normal gap, the pressure (normal force / tributary
+    /// area) and the force, combined with the walls' fields of the same names.
+    fn fields(&self) -> Vec<FieldSpec> {
+        let node = |name: &str, width, combine, empty| FieldSpec {
+            name: name.into(),
+            center: Center::Node,
+            width,
+            combine,
+            empty,
+        };
+        vec![
+            node("contact_gap", 1, Combine::Min, f64::NAN),
+            node("contact_pressure", 1, Combine::Sum, 0.0),
+            node("contact_force", 3, Combine::Sum, 0.0),
+        ]
+    }
+    fn field_values(&self, _s: &State, out: &mut [Vec<f64>]) {
+        for (p, c) in self.def.pairs.iter().zip(&self.last) {
+            let n = p.node;
+            out[0][n] = c.gap;
+            out[1][n] = if p.area > 0.0 {
+                c.normal_force / p.area
+            } else {
+                0.0
+            };
+            out[2][3 * n..3 * n + 3].copy_from_slice(&c.force);
+        }
+    }
+}

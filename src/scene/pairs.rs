@@ -1,0 +1,201 @@
+//! `[[pairs]]`: small-sliding contact between deformable parts (paper §3.7) in a deck.
+//! Each tracked node is paired once, here on rank 0 before partitioning, with the
+//! closest point on the reference surface's faces; the pairs and their face
+//! coordinates never change (DESIGN.md, "small-sliding surface-to-surface").
+
+use super::build::err;
+use crate::contact::law::{Threshold, DEFAULT_TANGENTIAL_AUGMENTATION};
+use crate::contact::pair::{on_face, project_on_face};
+use crate::contact::wall::ContactMethod;
+use crate::mesh::select::tributary_areas;
+use crate::mesh::{FaceRef, Mesh};
+use crate::model::pairs::{Pair, PairsDef};
+use crate::Result;
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+
+/// One `[[pairs]]` entry.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct PairsDeck {
+    pub name: String,
+    /// The tracked side: a surface (its nodes, with tributary areas for the pressure)
+    /// or a node set.
+    pub tracked: String,
+    /// The reference side: a surface of another part.
+    pub reference: String,
+    #[serde(default)]
+    pub method: ContactMethod,
+    /// Bonded in all directions from the start (no separation, no slip).
+    #[serde(default)]
+    pub tied: bool,
+    #[serde(default)]
+    pub friction: f64,
+    #[serde(default)]
+    pub kappa: Option<f64>,
+    #[serde(default = "one")]
+    pub penalty_scale: f64,
+    #[serde(default)]
+    pub tangential_augmentation: Option<f64>,
+    #[serde(default)]
+    pub friction_threshold: Threshold,
+    /// How far (along the normal) a tracked node may be from the reference surface
+    /// at the start to be paired; default: half the reference faces' mean size.
+    #[serde(default)]
+    pub search_distance: Option<f64>,
+}
+
+fn one() -> f64 {
+    1.0
+}
+
+/// What building pairs needs from the rest of the deck.
+pub struct PairInputs<'a> {
+    pub mesh: &'a Mesh,
+    pub surfaces: &'a BTreeMap<String, Vec<FaceRef>>,
+    pub set_nodes: &'a dyn Fn(String, &str) -> Result<Vec<usize>>,
+}
+
+/// Every `[[pairs]]` entry, paired.
+pub fn build_pairs(decks: &[PairsDeck], inp: &PairInputs) -> Result<Vec<PairsDef>> {
+    decks
+        .iter()
+        .enumerate()
+        .map(|(i, d)| build_one(d, &format!("pairs[{i}]"), inp))
+        .collect()
+}
+
+fn build_one(d: &PairsDeck, f: &str, inp: &PairInputs) -> Result<PairsDef> {
+    let mesh = inp.mesh;
+    let faces = inp.surfaces.get(&d.reference).ok_or_else(|| {
+        err(
+            format!("{f}.reference"),
+            format!(
+                "unknown surface `{}` (surfaces: {})",
+                d.reference,
+                inp.surfaces.keys().cloned().collect::<Vec<_>>().join(", ")
+            ),
+        )
+    })?;
+    let nodes = (inp.set_nodes)(format!("{f}.tracked"), &d.tracked)?;
+    let areas = inp
+        .surfaces
+        .get(&d.tracked)
+        .map(|fs| tributary_areas(mesh, fs))
+        .unwrap_or_default();
+    if !(d.friction >= 0.0 && d.friction.is_finite()) {
+        return Err(err(
+            format!("{f}.friction"),
+            format!("expected a coefficient ≥ 0, got {}", d.friction),
+        ));
+    }
+    if d.tied && d.friction > 0.0 {
+        return Err(err(
+            format!("{f}.friction"),
+            "a tied pair does not slip: give no friction with `tied = true`",
+        ));
+    }
+    for (key, v) in [
+        ("kappa", d.kappa),
+        ("penalty_scale", Some(d.penalty_scale)),
+        ("search_distance", d.search_distance),
+    ] {
+        if let Some(v) = v.filter(|v| !(v.is_finite() && *v > 0.0)) {
+            return Err(err(
+                format!("{f}.{key}"),
+                format!("expected a positive number, got {v}"),
+            ));
+        }
+    }
+    let alpha = d
+        .tangential_augmentation
+        .unwrap_or(DEFAULT_TANGENTIAL_AUGMENTATION);
+    if !(alpha > 0.0 && alpha <= 1.0) {
+        return Err(err(
+            format!("{f}.tangential_augmentation"),
+            format!("expected a value in (0, 1], got {alpha}"),
+        ));
+    }
+    // Each reference face: its nodes, positions and size.
+    let face_nodes: Vec<Vec<usize>> = faces.iter().map(|&fr| mesh.face_nodes(fr)).collect();
+    let face_x: Vec<Vec<[f64; 3]>> = face_nodes
+        .iter()
+        .map(|ns| ns.iter().map(|&n| mesh.coords[n]).collect())
+        .collect();
+    let size = |x: &[[f64; 3]]| -> f64 {
+        let m = x.len();
+        (0..m)
+            .map(|k| {
+                let (a, b) = (x[k], x[(k + 1) % m]);
+                ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
+            })
+            .sum::<f64>()
+            / m as f64
+    };
+    let mean_size = face_x.iter().map(|x| size(x)).sum::<f64>() / face_x.len() as f64;
+    let reach = d.search_distance.unwrap_or(0.5 * mean_size);
+    let mut pairs = Vec::new();
+    let mut unpaired = 0;
+    for &n in &nodes {
+        let x = mesh.coords[n];
+        let mut best: Option<(f64, usize, [f64; 2])> = None;
+        for (k, xs) in face_x.iter().enumerate() {
+            if face_nodes[k].contains(&n) {
+                continue;
+            }
+            // Cheap rejection: the face's bounding box grown by the reach.
+            let far = (0..3).any(|c| {
+                let lo = xs.iter().map(|p| p[c]).fold(f64::INFINITY, f64::min);
+                let hi = xs.iter().map(|p| p[c]).fold(f64::NEG_INFINITY, f64::max);
+                x[c] < lo - reach || x[c] > hi + reach
+            });
+            if far {
+                continue;
+            }
+            let Some((xi, dist)) = project_on_face(x, xs) else {
+                continue;
+            };
+            if !on_face(xs.len(), xi, 1e-8) || dist > reach {
+                continue;
+            }
+            if best.is_none_or(|b| dist < b.0) {
+                best = Some((dist, k, xi));
+            }
+        }
+        match best {
+            Some((_, k, xi)) => pairs.push(Pair {
+                node: n,
+                face: face_nodes[k].clone(),
+                xi,
+                area: areas.get(&n).copied().unwrap_or(0.0),
+            }),
+            None => unpaired += 1,
+        }
+    }
+    if pairs.is_empty() {
+        return Err(err(
+            f,
+            format!(
+                "`{}`: none of the {} tracked nodes of `{}` lies within {reach:.3e} of a face of `{}` (raise `search_distance` or check the surfaces)",
+                d.name,
+                nodes.len(),
+                d.tracked,
+                d.reference
+            ),
+        ));
+    }
+    Ok(PairsDef {
+        name: d.name.clone(),
+        method: d.method,
+        tied: d.tied,
+        friction: d.friction,
+        kappa: d.kappa,
+        penalty_scale: d.penalty_scale,
+        tangential_augmentation: alpha,
+        friction_threshold: d.friction_threshold,
+        tracked: d.tracked.clone(),
+        reference: d.reference.clone(),
+        pairs,
+        unpaired,
+    })
+}
