@@ -4,6 +4,7 @@
 //! loop over tracked nodes and the parallel layer never sees any of it.
 
 pub mod law;
+pub mod mortar;
 pub mod motion;
 pub mod pair;
 pub mod shape;

@@ -1,10 +1,12 @@
 //! One small-sliding contact pair (paper §3.7, LS-DYNA's
 //! `*CONTACT_CONSTRAINT_SURFACE_TO_SURFACE`, Abaqus' small sliding): a tracked node s
-//! paired once, at the start, with the point ξ of a reference face (quad4 or tri3) of
-//! another part. The pair's local coordinates never change; what is measured in the
-//! current configuration is d = x_s − x_m, x_m = Σ N_a(ξ) x_a, in the face's frame
-//! [n, t1, t2] at ξ (n = a1 × a2 / |a1 × a2|, outward from the reference part; t1 along
-//! a1 = ∂x/∂ξ; t2 = n × t1).
+//! paired once, at the start, with reference nodes a and weights w_a (Σ w_a = 1) that
+//! never change. What is measured in the current configuration is d = x_s − x_m,
+//! x_m = Σ w_a x_a, in the frame [n, t1, t2] of the reference face the node projects
+//! on (n = a1 × a2 / |a1 × a2| at its point ξ, outward from the reference part; t1 along
+//! a1 = ∂x/∂ξ; t2 = n × t1). Node-to-face weights are the face's shape functions at ξ;
+//! mortar weights ([`super::mortar`]) spread the node over every reference face its
+//! dual shape function overlaps.
 //!
 //! The gaps handed to the contact law (the walls' [`super::law`], unchanged) are
 //! g = (n · (d − c_N), t1 · (d − c_T), t2 · (d − c_T)): for contact c_N = 0 and c_T = d at
@@ -188,12 +190,16 @@ pub struct PairEval {
 /// stick row whose node is held by a support regular.
 const JACOBIAN_REG: f64 = 1e-8;
 
-/// Evaluate one pair: `x[0]` the tracked node, `x[1..]` the face's nodes (current
-/// positions); `lam` its multipliers (ignored without); `c_n`, `c_t` the gap offsets
-/// (see the module docs); `decision` the law's branch choice.
+/// Evaluate one pair: `x[0]` the tracked node, `x[1..]` the reference nodes (current
+/// positions) with their weights `w` in x_m and their shape-function derivatives `dn`
+/// (∂N/∂ξ, ∂N/∂η at the node's point on its face; zero for nodes off that face) that
+/// give the frame; `lam` its multipliers (ignored without); `c_n`, `c_t` the gap
+/// offsets (see the module docs); `decision` the law's branch choice.
+#[allow(clippy::too_many_arguments)]
 pub fn evaluate(
     x: &[[f64; 3]],
-    xi: [f64; 2],
+    w: &[f64],
+    dn: &[[f64; 2]],
     lam: [f64; 3],
     c_n: [f64; 3],
     c_t: [f64; 3],
@@ -201,7 +207,7 @@ pub fn evaluate(
     decision: Decision,
 ) -> PairEval {
     let nf = x.len() - 1;
-    let (nn, dn) = face_shape(nf, xi);
+    let nn = w;
     let mut xm = [0.0; 3];
     let mut a1 = [0.0; 3];
     let mut a2 = [0.0; 3];
@@ -445,7 +451,9 @@ mod tests {
                 for (xs, lam) in cases {
                     let mut x = vec![xs];
                     x.extend_from_slice(nodes);
-                    let base = evaluate(&x, xi, lam, [0.0; 3], c_t, law, Decision::Natural);
+                    let (w, dn) = face_shape(nodes.len(), xi);
+                    let base =
+                        evaluate(&x, &w, &dn, lam, [0.0; 3], c_t, law, Decision::Natural);
                     branches.insert(format!("{:?}", base.branch));
                     let forced = Decision::Forced(base.branch);
                     let nr = base.r.len();
@@ -461,7 +469,7 @@ mod tests {
                             } else {
                                 l[j - 3 * np] += s * h;
                             }
-                            evaluate(&y, xi, l, [0.0; 3], c_t, law, forced).r
+                            evaluate(&y, &w, &dn, l, [0.0; 3], c_t, law, forced).r
                         };
                         let (rp, rm) = (at(1.0), at(-1.0));
                         for i in 0..nr {
@@ -498,12 +506,13 @@ mod tests {
             [0.0, 1.0, 0.0],
         ];
         let xi = [0.25, -0.4];
-        let (n, _) = face_shape(4, xi);
+        let (n, dn) = face_shape(4, xi);
         let xm: [f64; 3] =
             std::array::from_fn(|c| (0..4).map(|k| n[k] * face[k][c]).sum());
         let e = evaluate(
             &[[xm[0], xm[1], xm[2]], face[0], face[1], face[2], face[3]],
-            xi,
+            &n,
+            &dn,
             [0.0; 3],
             [0.0; 3],
             [0.0; 3],
@@ -513,9 +522,11 @@ mod tests {
         assert!(e.gap.abs() < 1e-15);
         let x = [xm[0] + 0.01, xm[1] - 0.02, xm[2] + 0.05];
         let (found, dist) = project_on_face(x, &face).unwrap();
+        let (n, dn) = face_shape(4, found);
         let ev = evaluate(
             &[x, face[0], face[1], face[2], face[3]],
-            found,
+            &n,
+            &dn,
             [0.0; 3],
             [0.0; 3],
             [0.0; 3],

@@ -20,13 +20,15 @@ use crate::contact::pair::{evaluate, PairLaw};
 use crate::contact::wall::ContactMethod;
 use serde::{Deserialize, Serialize};
 
-/// One pair: the tracked node, the reference face's nodes (3 or 4, outward order) and
-/// the point's parameters on it, with the node's tributary area (0 where unknown).
+/// One pair: the tracked node, its reference nodes with their weights in x_m and the
+/// shape-function derivatives that give the frame (see [`crate::contact::pair`]), and
+/// the node's area (tributary or mortar; 0 where unknown).
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
 pub struct Pair {
     pub node: usize,
-    pub face: Vec<usize>,
-    pub xi: [f64; 2],
+    pub nodes: Vec<usize>,
+    pub w: Vec<f64>,
+    pub dn: Vec<[f64; 2]>,
     pub area: f64,
 }
 
@@ -87,7 +89,7 @@ impl ContributionKind for PairsDef {
     fn stencils(&self) -> Vec<Vec<usize>> {
         self.pairs
             .iter()
-            .map(|p| std::iter::once(p.node).chain(p.face.iter().copied()).collect())
+            .map(|p| std::iter::once(p.node).chain(p.nodes.iter().copied()).collect())
             .collect()
     }
     /// The pairs whose tracked node this rank owns, in local node numbers (the face's
@@ -99,9 +101,8 @@ impl ContributionKind for PairsDef {
             .filter_map(|p| {
                 l.owned(p.node).map(|node| Pair {
                     node,
-                    face: p.face.iter().map(|&n| l.local_of[n]).collect(),
-                    xi: p.xi,
-                    area: p.area,
+                    nodes: p.nodes.iter().map(|&n| l.local_of[n]).collect(),
+                    ..p.clone()
                 })
             })
             .collect();
@@ -207,7 +208,7 @@ impl Pairs {
     fn positions(&self, j: usize, coords: &[[f64; 3]], u: &[f64]) -> Vec<[f64; 3]> {
         let p = &self.def.pairs[j];
         std::iter::once(p.node)
-            .chain(p.face.iter().copied())
+            .chain(p.nodes.iter().copied())
             .map(|n| std::array::from_fn(|c| coords[n][c] + u[3 * n + c]))
             .collect()
     }
@@ -217,9 +218,11 @@ impl Pairs {
         let zero = vec![0.0; 3 * coords.len()];
         for j in 0..self.def.pairs.len() {
             let x = self.positions(j, coords, &zero);
+            let p = &self.def.pairs[j];
             let e = evaluate(
                 &x,
-                self.def.pairs[j].xi,
+                &p.w,
+                &p.dn,
                 [0.0; 3],
                 [0.0; 3],
                 [0.0; 3],
@@ -261,7 +264,7 @@ impl Contribution for Pairs {
     fn pattern(&self, dofs: &DofMap, out: &mut Vec<(usize, usize)>) {
         for (j, p) in self.def.pairs.iter().enumerate() {
             let mut blocks: Vec<usize> = std::iter::once(p.node)
-                .chain(p.face.iter().copied())
+                .chain(p.nodes.iter().copied())
                 .map(|n| dofs.global_block(n))
                 .collect();
             if let Some(m0) = self.mult {
@@ -316,9 +319,9 @@ impl Contribution for Pairs {
                 Decision::Natural
             };
             let law = self.law(j);
-            let e = evaluate(&x, self.def.pairs[j].xi, lam, c_n, c_t, &law, decision);
             let p = &self.def.pairs[j];
-            let nodes: Vec<usize> = std::iter::once(p.node).chain(p.face.iter().copied()).collect();
+            let e = evaluate(&x, &p.w, &p.dn, lam, c_n, c_t, &law, decision);
+            let nodes: Vec<usize> = std::iter::once(p.node).chain(p.nodes.iter().copied()).collect();
             let np = nodes.len();
             if let Some((f_int, f_ext)) = ev.forces.as_mut() {
                 for (q, &n) in nodes.iter().enumerate() {

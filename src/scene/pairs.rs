@@ -5,7 +5,8 @@
 
 use super::build::err;
 use crate::contact::law::{Threshold, DEFAULT_TANGENTIAL_AUGMENTATION};
-use crate::contact::pair::{on_face, project_on_face};
+use crate::contact::mortar::{dual_coefficients, overlap_integrals};
+use crate::contact::pair::{face_shape, on_face, project_on_face};
 use crate::contact::wall::ContactMethod;
 use crate::mesh::select::tributary_areas;
 use crate::mesh::{FaceRef, Mesh};
@@ -43,10 +44,65 @@ pub struct PairsDeck {
     /// at the start to be paired; default: half the reference faces' mean size.
     #[serde(default)]
     pub search_distance: Option<f64>,
+    /// How a node's reference point is weighted: "mortar" (dual mortar integrals over
+    /// the tracked faces: passes the contact patch test on any meshes; the default for a
+    /// tracked surface) or "node" (the face's shape functions at the node's closest
+    /// point: node-to-face; the default for a tracked node set).
+    #[serde(default)]
+    pub weights: Option<Weights>,
+}
+
+/// See [`PairsDeck::weights`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Weights {
+    Mortar,
+    Node,
 }
 
 fn one() -> f64 {
     1.0
+}
+
+/// M_ta = ∫ Φ_t N_a of every tracked node t with every reference node a (by global
+/// number), and D_t = ∫ N_t, over the tracked faces ([`crate::contact::mortar`]).
+#[allow(clippy::type_complexity)]
+fn mortar_integrals(
+    mesh: &Mesh,
+    tracked: &[FaceRef],
+    ref_nodes: &[Vec<usize>],
+    ref_x: &[Vec<[f64; 3]>],
+    reach: f64,
+) -> (BTreeMap<usize, BTreeMap<usize, f64>>, BTreeMap<usize, f64>) {
+    let mut m: BTreeMap<usize, BTreeMap<usize, f64>> = BTreeMap::new();
+    let mut d_t: BTreeMap<usize, f64> = BTreeMap::new();
+    let bbox = |x: &[[f64; 3]]| -> ([f64; 3], [f64; 3]) {
+        let lo = std::array::from_fn(|c| x.iter().map(|p| p[c]).fold(f64::INFINITY, f64::min));
+        let hi = std::array::from_fn(|c| x.iter().map(|p| p[c]).fold(f64::NEG_INFINITY, f64::max));
+        (lo, hi)
+    };
+    let ref_boxes: Vec<([f64; 3], [f64; 3])> = ref_x.iter().map(|x| bbox(x)).collect();
+    for &tf in tracked {
+        let tn = mesh.face_nodes(tf);
+        let xs: Vec<[f64; 3]> = tn.iter().map(|&n| mesh.coords[n]).collect();
+        let (a, d) = dual_coefficients(&xs);
+        for (t, &n) in tn.iter().enumerate() {
+            *d_t.entry(n).or_default() += d[t];
+        }
+        let (lo, hi) = bbox(&xs);
+        for (k, (rlo, rhi)) in ref_boxes.iter().enumerate() {
+            if (0..3).any(|c| rlo[c] > hi[c] + reach || rhi[c] < lo[c] - reach) {
+                continue;
+            }
+            if ref_nodes[k].iter().any(|r| tn.contains(r)) {
+                continue;
+            }
+            for (t, r, v) in overlap_integrals(&xs, &a, &ref_x[k]) {
+                *m.entry(tn[t]).or_default().entry(ref_nodes[k][r]).or_default() += v;
+            }
+        }
+    }
+    (m, d_t)
 }
 
 /// What building pairs needs from the rest of the deck.
@@ -134,6 +190,25 @@ fn build_one(d: &PairsDeck, f: &str, inp: &PairInputs) -> Result<PairsDef> {
     };
     let mean_size = face_x.iter().map(|x| size(x)).sum::<f64>() / face_x.len() as f64;
     let reach = d.search_distance.unwrap_or(0.5 * mean_size);
+    let tracked_faces = inp.surfaces.get(&d.tracked);
+    let weights = match (d.weights, tracked_faces) {
+        (Some(Weights::Mortar), None) => {
+            return Err(err(
+                format!("{f}.weights"),
+                format!(
+                    "mortar weights integrate over the tracked faces, but `{}` is a node set; name a surface or use weights = \"node\"",
+                    d.tracked
+                ),
+            ))
+        }
+        (Some(w), _) => w,
+        (None, Some(_)) => Weights::Mortar,
+        (None, None) => Weights::Node,
+    };
+    let mortar = match (weights, tracked_faces) {
+        (Weights::Mortar, Some(tf)) => Some(mortar_integrals(mesh, tf, &face_nodes, &face_x, reach)),
+        _ => None,
+    };
     let mut pairs = Vec::new();
     let mut unpaired = 0;
     for &n in &nodes {
@@ -163,12 +238,54 @@ fn build_one(d: &PairsDeck, f: &str, inp: &PairInputs) -> Result<PairsDef> {
             }
         }
         match best {
-            Some((_, k, xi)) => pairs.push(Pair {
-                node: n,
-                face: face_nodes[k].clone(),
-                xi,
-                area: areas.get(&n).copied().unwrap_or(0.0),
-            }),
+            Some((_, k, xi)) => {
+                let (w, dn) = face_shape(face_nodes[k].len(), xi);
+                let Some((m, d_t)) = &mortar else {
+                    pairs.push(Pair {
+                        node: n,
+                        nodes: face_nodes[k].clone(),
+                        w,
+                        dn,
+                        area: areas.get(&n).copied().unwrap_or(0.0),
+                    });
+                    continue;
+                };
+                // Mortar: the weights M_ta / Σ_a M_ta over every reference node the
+                // node's dual function overlaps; the frame still from its face at ξ.
+                let row = m.get(&n).cloned().unwrap_or_default();
+                let covered: f64 = row.values().sum();
+                let full = d_t.get(&n).copied().unwrap_or(0.0);
+                if !(covered > 0.5 * full && full > 0.0) {
+                    unpaired += 1;
+                    continue;
+                }
+                let mut nodes_all: Vec<usize> = row.keys().copied().collect();
+                for &a in &face_nodes[k] {
+                    if !nodes_all.contains(&a) {
+                        nodes_all.push(a);
+                    }
+                }
+                let wv = nodes_all
+                    .iter()
+                    .map(|a| row.get(a).copied().unwrap_or(0.0) / covered)
+                    .collect();
+                let dnv = nodes_all
+                    .iter()
+                    .map(|a| {
+                        face_nodes[k]
+                            .iter()
+                            .position(|b| b == a)
+                            .map_or([0.0; 2], |i| dn[i])
+                    })
+                    .collect();
+                pairs.push(Pair {
+                    node: n,
+                    nodes: nodes_all,
+                    w: wv,
+                    dn: dnv,
+                    area: covered,
+                });
+            }
             None => unpaired += 1,
         }
     }
