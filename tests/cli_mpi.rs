@@ -1189,6 +1189,42 @@ fn entity_roll_same_on_one_and_two_ranks() {
     }
 }
 
+/// Small-sliding pairs on 2 ranks with the blocks split along z (`contact-patch` with
+/// `[partition] slabs` along z): the reference surface lives on rank 0 alone while the
+/// tracked nodes are owned by both, so rank 1's pairs take their faces from rank 0 as
+/// ghosts (and send the faces' rows back). The 1-rank run, step for step, with the same
+/// Newton iterations.
+#[test]
+fn contact_patch_pairs_across_ranks_same_on_one_and_two() {
+    let dir = temp_dir("rank-pairs");
+    let deck = alfe::scene::BUILTIN
+        .iter()
+        .find(|s| s.0 == "contact-patch")
+        .unwrap()
+        .2
+        .to_string()
+        + "\n[partition]\nmethod = \"slabs\"\naxis = \"z\"\n";
+    std::fs::write(dir.join("patch.toml"), deck).unwrap();
+    let check = ok(alfe(&dir, 1, &["check", "patch.toml", "--ranks", "2"]));
+    for want in [
+        "pairs interface: nodes owned by rank(s) 0,1",
+        "surface lower_top on rank(s) 0\n",
+    ] {
+        assert!(check.contains(want), "{want}: {check}");
+    }
+    ok(alfe(
+        &dir,
+        1,
+        &["run", "patch.toml", "--out", "r1", "--quiet"],
+    ));
+    ok(alfe(
+        &dir,
+        2,
+        &["run", "patch.toml", "--out", "r2", "--quiet"],
+    ));
+    assert_same_runs_counts(&dir.join("r1"), &dir.join("r2"), "contact-patch", true);
+}
+
 /// A body with mass in implicit dynamics on 2 ranks (`tests/entity-drop.toml`: a plate
 /// dropped on an elastic column whose top nodes both ranks own; the plate's mass on its
 /// owner only): the 1-rank run, step for step (measured 1e-14).

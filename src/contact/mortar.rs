@@ -14,6 +14,9 @@
 //! with a degree-5 rule (exact for the products of bilinear functions on parallelogram
 //! faces).
 
+// Index loops over small dense matrices read like the formulas.
+#![allow(clippy::needless_range_loop)]
+
 /// Degree-5 7-point triangle rule (Strang & Fix): barycentric points and weights
 /// (summing to 1: multiply by the triangle's area).
 const TRI7: [([f64; 3], f64); 7] = {
@@ -73,7 +76,10 @@ impl Plane {
             unit(cross(sub(x[1], x[0]), sub(x[2], x[0])))
         };
         let e1 = unit(sub(x[1], x[0]));
-        let e1 = unit(sub(e1, [n[0] * dot(n, e1), n[1] * dot(n, e1), n[2] * dot(n, e1)]));
+        let e1 = unit(sub(
+            e1,
+            [n[0] * dot(n, e1), n[1] * dot(n, e1), n[2] * dot(n, e1)],
+        ));
         Self {
             c,
             n,
@@ -202,7 +208,11 @@ pub fn dual_coefficients(x: &[[f64; 3]]) -> (Vec<Vec<f64>>, Vec<f64>) {
 /// ∫ Φ_t N_a over the overlap of a tracked face `xs` (nodes' positions; `a` its dual
 /// coefficients) with a reference face `xm`, as (t, a, value) with t, a local to the
 /// faces; empty where they do not overlap or face the same way.
-pub fn overlap_integrals(xs: &[[f64; 3]], a: &[Vec<f64>], xm: &[[f64; 3]]) -> Vec<(usize, usize, f64)> {
+pub fn overlap_integrals(
+    xs: &[[f64; 3]],
+    a: &[Vec<f64>],
+    xm: &[[f64; 3]],
+) -> Vec<(usize, usize, f64)> {
     let ps = Plane::of(xs);
     let pm = Plane::of(xm);
     if dot(ps.n, pm.n) >= 0.0 {
@@ -239,7 +249,8 @@ pub fn overlap_integrals(xs: &[[f64; 3]], a: &[Vec<f64>], xm: &[[f64; 3]]) -> Ve
                 b[0] * c[1] + b[1] * p[1] + b[2] * q[1],
             ];
             let x3 = ps.to3(pt);
-            let (Some((eta, _)), Some((xi, _))) = (project_on_face(x3, xs), project_on_face(x3, xm))
+            let (Some((eta, _)), Some((xi, _))) =
+                (project_on_face(x3, xs), project_on_face(x3, xm))
             else {
                 continue;
             };
@@ -346,7 +357,11 @@ mod tests {
             for t in 0..nf {
                 for u in 0..nf {
                     let want = if t == u { d[t] } else { 0.0 };
-                    assert!((m[t][u] - want).abs() < 1e-12, "{t} {u}: {} vs {want}", m[t][u]);
+                    assert!(
+                        (m[t][u] - want).abs() < 1e-12,
+                        "{t} {u}: {} vs {want}",
+                        m[t][u]
+                    );
                 }
             }
         }
@@ -382,7 +397,12 @@ mod tests {
             }
         }
         for t in 0..4 {
-            assert!((row[t] - d[t]).abs() < 1e-8 * d[t], "{t}: {} vs {}", row[t], d[t]);
+            assert!(
+                (row[t] - d[t]).abs() < 1e-8 * d[t],
+                "{t}: {} vs {}",
+                row[t],
+                d[t]
+            );
         }
         let area: f64 = d.iter().sum();
         assert!((col_total - area).abs() < 1e-8 * area);

@@ -20,7 +20,7 @@
 // Index loops over 3×3 frames read like the formulas.
 #![allow(clippy::needless_range_loop)]
 
-use super::law::{alm_law, penalty, AlmLaw, Branch, Decision};
+use super::law::{alm_law, penalty, AlmLaw, Branch, Decision, Tangential};
 
 type M3 = [[f64; 3]; 3];
 
@@ -245,8 +245,21 @@ pub fn evaluate(
     let mut ft_new = [0.0; 3];
     match *law {
         PairLaw::Alm { law, kappa } => {
+            // A closed pair that has carried no force yet (the first iteration of its
+            // first step: λ = 0, no slip) starts in stick, not "free": a part held only
+            // by friction (a clamped plate) has no tangential stiffness otherwise, and
+            // the first linear solve is singular. Its next iterations decide as usual.
+            let untouched = lam == [0.0; 3] && g[1] == 0.0 && g[2] == 0.0 && g[0] <= 0.0;
+            let decision = match decision {
+                Decision::Natural if untouched && law.mu > 0.0 => Decision::Forced(Branch {
+                    active: true,
+                    tangential: Tangential::Stick,
+                }),
+                d => d,
+            };
             let p = alm_law(g, lam, &law, decision);
-            (active, sticking, branch, cone_excess) = (p.active, p.sticking, p.branch, p.cone_excess);
+            (active, sticking, branch, cone_excess) =
+                (p.active, p.sticking, p.branch, p.cone_excess);
             for i in 0..3 {
                 fl[i] = kappa * (lam[i] - p.h[i]);
                 r_l[i] = -kappa * p.h[i];
@@ -406,7 +419,7 @@ pub fn evaluate(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::contact::law::{Tangential, Threshold};
+    use crate::contact::law::Threshold;
 
     /// A slanted, warped quad and a tracked node near it, every law: the Jacobian
     /// against central differences of the residual on the branch of the base point.
@@ -446,14 +459,17 @@ mod tests {
         let c_t = [0.01, -0.02, 0.0];
         let mut branches = std::collections::BTreeSet::new();
         for nodes in [&face[..], &tri[..]] {
-            let xi = if nodes.len() == 3 { [0.3, 0.35] } else { [-0.1, 0.2] };
+            let xi = if nodes.len() == 3 {
+                [0.3, 0.35]
+            } else {
+                [-0.1, 0.2]
+            };
             for law in &laws {
                 for (xs, lam) in cases {
                     let mut x = vec![xs];
                     x.extend_from_slice(nodes);
                     let (w, dn) = face_shape(nodes.len(), xi);
-                    let base =
-                        evaluate(&x, &w, &dn, lam, [0.0; 3], c_t, law, Decision::Natural);
+                    let base = evaluate(&x, &w, &dn, lam, [0.0; 3], c_t, law, Decision::Natural);
                     branches.insert(format!("{:?}", base.branch));
                     let forced = Decision::Forced(base.branch);
                     let nr = base.r.len();
@@ -507,8 +523,7 @@ mod tests {
         ];
         let xi = [0.25, -0.4];
         let (n, dn) = face_shape(4, xi);
-        let xm: [f64; 3] =
-            std::array::from_fn(|c| (0..4).map(|k| n[k] * face[k][c]).sum());
+        let xm: [f64; 3] = std::array::from_fn(|c| (0..4).map(|k| n[k] * face[k][c]).sum());
         let e = evaluate(
             &[[xm[0], xm[1], xm[2]], face[0], face[1], face[2], face[3]],
             &n,

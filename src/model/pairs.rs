@@ -89,7 +89,11 @@ impl ContributionKind for PairsDef {
     fn stencils(&self) -> Vec<Vec<usize>> {
         self.pairs
             .iter()
-            .map(|p| std::iter::once(p.node).chain(p.nodes.iter().copied()).collect())
+            .map(|p| {
+                std::iter::once(p.node)
+                    .chain(p.nodes.iter().copied())
+                    .collect()
+            })
             .collect()
     }
     /// The pairs whose tracked node this rank owns, in local node numbers (the face's
@@ -321,7 +325,9 @@ impl Contribution for Pairs {
             let law = self.law(j);
             let p = &self.def.pairs[j];
             let e = evaluate(&x, &p.w, &p.dn, lam, c_n, c_t, &law, decision);
-            let nodes: Vec<usize> = std::iter::once(p.node).chain(p.nodes.iter().copied()).collect();
+            let nodes: Vec<usize> = std::iter::once(p.node)
+                .chain(p.nodes.iter().copied())
+                .collect();
             let np = nodes.len();
             if let Some((f_int, f_ext)) = ev.forces.as_mut() {
                 for (q, &n) in nodes.iter().enumerate() {
@@ -336,16 +342,16 @@ impl Contribution for Pairs {
                 }
             }
             if let Some(k) = ev.jacobian.as_deref_mut() {
-                let mut blocks: Vec<usize> = nodes.iter().map(|&n| ev.dofs.global_block(n)).collect();
+                let mut blocks: Vec<usize> =
+                    nodes.iter().map(|&n| ev.dofs.global_block(n)).collect();
                 if let Some(m0) = self.mult {
                     blocks.push(ev.dofs.global_block(m0 + j));
                 }
                 let nr = 3 * blocks.len();
                 for (bi, &a) in blocks.iter().enumerate() {
                     for (bj, &b) in blocks.iter().enumerate() {
-                        let blk: [f64; 9] = std::array::from_fn(|t| {
-                            e.k[(3 * bi + t / 3) * nr + 3 * bj + t % 3]
-                        });
+                        let blk: [f64; 9] =
+                            std::array::from_fn(|t| e.k[(3 * bi + t / 3) * nr + 3 * bj + t % 3]);
                         k.add_block(a, b, &blk);
                     }
                 }

@@ -590,7 +590,10 @@ pub fn build(deck: &Deck, deck_dir: &Path) -> Result<Scene> {
             "couplings",
             deck.couplings.iter().map(|c| c.name.as_str()).collect(),
         ),
-        ("pairs", deck.pairs.iter().map(|c| c.name.as_str()).collect()),
+        (
+            "pairs",
+            deck.pairs.iter().map(|c| c.name.as_str()).collect(),
+        ),
     ];
     for (what, names) in &named {
         for (i, &n) in names.iter().enumerate() {

@@ -55,6 +55,11 @@ pub const BUILTIN: &[(&str, &str, &str)] = &[
         include_str!("scenes/cantilever.toml"),
     ),
     (
+        "contact-patch",
+        "two blocks with non-matching meshes in small-sliding contact: uniform pressure, then shear below mu (sticks)",
+        include_str!("scenes/contact-patch.toml"),
+    ),
+    (
         "patch-hex8",
         "patch test: distorted hex8 cube under homogeneous triaxial traction, linear elastic",
         include_str!("scenes/patch-hex8.toml"),

@@ -98,7 +98,10 @@ fn mortar_integrals(
                 continue;
             }
             for (t, r, v) in overlap_integrals(&xs, &a, &ref_x[k]) {
-                *m.entry(tn[t]).or_default().entry(ref_nodes[k][r]).or_default() += v;
+                *m.entry(tn[t])
+                    .or_default()
+                    .entry(ref_nodes[k][r])
+                    .or_default() += v;
             }
         }
     }
@@ -206,7 +209,9 @@ fn build_one(d: &PairsDeck, f: &str, inp: &PairInputs) -> Result<PairsDef> {
         (None, None) => Weights::Node,
     };
     let mortar = match (weights, tracked_faces) {
-        (Weights::Mortar, Some(tf)) => Some(mortar_integrals(mesh, tf, &face_nodes, &face_x, reach)),
+        (Weights::Mortar, Some(tf)) => {
+            Some(mortar_integrals(mesh, tf, &face_nodes, &face_x, reach))
+        }
         _ => None,
     };
     let mut pairs = Vec::new();
