@@ -146,3 +146,48 @@ fn bad_pair_decks_name_the_field() {
         assert!(msg.contains(want), "expected `{want}` in: {msg}");
     }
 }
+
+/// `two-body-hertz`: Hertz's line contact between two deformable cylinders of different
+/// materials (E* from both bodies, R* = R/2), from the measured force per length F':
+/// the peak pressure within 3 % of p₀ = √(F' E*/(π R*)) (measured +1.7 %), every
+/// tracked node's pressure within 3 % of p₀ √(1 − x²/b²) where it is in contact
+/// (measured −1.1 … +1.8 %), the half-width b between the last node in contact and the
+/// first open one, and no penetration.
+#[test]
+fn two_body_hertz_line_contact() {
+    let out = run_deck("pairs-hertz", &builtin("two-body-hertz"));
+    let es = 1.0 / ((1.0 - 0.09) / 1000.0 + (1.0 - 0.0625) / 3000.0);
+    let rs = 5.0;
+    let f = *column(&out, "contact.fy").last().unwrap();
+    let p0 = (f * es / (std::f64::consts::PI * rs)).sqrt();
+    let b = (4.0 * f * rs / (std::f64::consts::PI * es)).sqrt();
+    let gap = field(&out, "contact_gap");
+    let p = field(&out, "contact_pressure");
+    let nodes = out.displacement_by_node();
+    let mut peak = 0.0f64;
+    let (mut last_in, mut first_out) = (0.0f64, f64::INFINITY);
+    for ((g, pi), n) in gap.iter().zip(&p).zip(&nodes) {
+        if g.is_nan() {
+            continue;
+        }
+        let x = n.1[0].abs();
+        peak = peak.max(*pi);
+        if *pi > 0.0 {
+            last_in = last_in.max(x);
+            let want = p0 * (1.0 - (x / b).powi(2)).max(0.0).sqrt();
+            assert!(
+                (pi - want).abs() < 0.03 * p0,
+                "pressure {pi} at x = {x}, Hertz {want}"
+            );
+        } else {
+            first_out = first_out.min(x);
+        }
+    }
+    assert!((peak / p0 - 1.0).abs() < 0.03, "peak {peak} vs p0 {p0}");
+    assert!(
+        last_in < b && b < first_out,
+        "b = {b}: in to {last_in}, open from {first_out}"
+    );
+    assert!(f > 30.0, "force per length {f}");
+    assert!(column(&out, "max_penetration").iter().all(|&g| g < 1e-10));
+}

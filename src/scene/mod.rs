@@ -60,6 +60,11 @@ pub const BUILTIN: &[(&str, &str, &str)] = &[
         include_str!("scenes/contact-patch.toml"),
     ),
     (
+        "two-body-hertz",
+        "two elastic cylinders of different materials pressed together: Hertz line contact through small-sliding pairs",
+        include_str!("scenes/two-body-hertz.toml"),
+    ),
+    (
         "patch-hex8",
         "patch test: distorted hex8 cube under homogeneous triaxial traction, linear elastic",
         include_str!("scenes/patch-hex8.toml"),

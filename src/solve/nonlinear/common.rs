@@ -133,6 +133,9 @@ pub struct Monitor {
     max_energy: f64,
     best: f64,
     best_at: usize,
+    /// The force scale of the divergence test, fixed at the first point without a
+    /// pending prescribed increment.
+    divergence_scale: Option<f64>,
 }
 
 impl Default for Monitor {
@@ -142,6 +145,7 @@ impl Default for Monitor {
             last_energy: f64::INFINITY,
             max_energy: 0.0,
             best: f64::INFINITY,
+            divergence_scale: None,
             best_at: 0,
         }
     }
@@ -197,6 +201,13 @@ impl Monitor {
         if !ev.rn.is_finite() {
             return Verdict::Fail("the residual is not finite".into());
         }
+        // A step driven by prescribed displacements starts from a state whose forces
+        // are round-off (a body at rest): its scale is set where the increment has been
+        // applied, or a first correction of ordinary size would read as divergence.
+        if ev.gap == 0.0 && self.divergence_scale.is_none() {
+            self.divergence_scale = Some(scale.max(ev.rn).max(ev.f_ref));
+        }
+        let scale = self.divergence_scale.unwrap_or(0.0);
         if it > 0 && scale > 0.0 && ev.rn > DIVERGENCE_FACTOR * scale {
             return Verdict::Fail(format!(
                 "diverged: residual grew to {:.3e} (force scale {scale:.3e})",
