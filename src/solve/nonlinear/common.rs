@@ -202,10 +202,11 @@ impl Monitor {
             return Verdict::Fail("the residual is not finite".into());
         }
         // A step driven by prescribed displacements starts from a state whose forces
-        // are round-off (a body at rest): its scale is set where the increment has been
-        // applied, or a first correction of ordinary size would read as divergence.
+        // are round-off (a body at rest): its scale also takes the force scale where
+        // the increment has been applied, or a first correction of ordinary size would
+        // read as divergence.
         if ev.gap == 0.0 && self.divergence_scale.is_none() {
-            self.divergence_scale = Some(scale.max(ev.rn).max(ev.f_ref));
+            self.divergence_scale = Some(scale.max(ev.f_ref));
         }
         let scale = self.divergence_scale.unwrap_or(0.0);
         if it > 0 && scale > 0.0 && ev.rn > DIVERGENCE_FACTOR * scale {
