@@ -1225,6 +1225,43 @@ fn contact_patch_pairs_across_ranks_same_on_one_and_two() {
     assert_same_runs_counts(&dir.join("r1"), &dir.join("r2"), "contact-patch", true);
 }
 
+/// A bolt section split between the ranks (`tests/bolt-bar.toml` cut in slabs along x:
+/// each rank tracks half the section's nodes; one owns the shortening, the other reads
+/// it and sends its rows): the 1-rank run and the same bolt force at every step.
+#[test]
+fn bolt_section_across_ranks_same_on_one_and_two() {
+    let dir = temp_dir("rank-bolt");
+    let deck = include_str!("bolt-bar.toml").to_string()
+        + "\n[partition]\nmethod = \"slabs\"\naxis = \"x\"\n";
+    std::fs::write(dir.join("bolt.toml"), deck).unwrap();
+    let check = ok(alfe(&dir, 1, &["check", "bolt.toml", "--ranks", "2"]));
+    assert!(
+        check.contains("pairs bolt1: nodes owned by rank(s) 0,1"),
+        "{check}"
+    );
+    ok(alfe(
+        &dir,
+        1,
+        &["run", "bolt.toml", "--out", "r1", "--quiet"],
+    ));
+    ok(alfe(
+        &dir,
+        2,
+        &["run", "bolt.toml", "--out", "r2", "--quiet"],
+    ));
+    let (a, b) = (dir.join("r1"), dir.join("r2"));
+    assert_same_runs_counts(&a, &b, "bolt-bar", true);
+    let (ha, hb) = (
+        history(&a.join("history.csv")),
+        history(&b.join("history.csv")),
+    );
+    let i = ha[0].iter().position(|c| c == "bolt1.force").unwrap();
+    for (x, y) in ha[1..].iter().zip(&hb[1..]) {
+        let (x, y): (f64, f64) = (x[i].parse().unwrap(), y[i].parse().unwrap());
+        assert!((x - y).abs() < 1e-8 * x.abs(), "bolt force {x} vs {y}");
+    }
+}
+
 /// A body with mass in implicit dynamics on 2 ranks (`tests/entity-drop.toml`: a plate
 /// dropped on an elastic column whose top nodes both ranks own; the plate's mass on its
 /// owner only): the 1-rank run, step for step (measured 1e-14).

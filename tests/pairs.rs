@@ -79,7 +79,8 @@ fn contact_patch_sticks_under_a_shear_below_mu() {
 /// The generalized Jacobian with pairs (mortar weights over several faces, the frame
 /// of the node's face) against central differences, at perturbed states of converged
 /// runs: ALM with friction (sticking), penalty without friction (with friction a
-/// converged penalty state sits on the cone's kink), tied ALM and tied penalty.
+/// converged penalty state sits on the cone's kink), tied ALM and tied penalty, and a
+/// locked bolt section (its shortening's row and column).
 #[test]
 fn pair_jacobian_matches_finite_differences() {
     let base = builtin("contact-patch");
@@ -99,6 +100,9 @@ fn pair_jacobian_matches_finite_differences() {
             edit(&base, "friction = 0.5", "tied = true\nmethod = \"penalty\""),
         ),
     ];
+    let cases = cases
+        .into_iter()
+        .chain([("bolt", include_str!("bolt-bar.toml").to_string())]);
     for (name, deck) in cases {
         let mut out = run_deck(&format!("pairs-jac-{name}"), &deck);
         for seed in [1, 2] {
@@ -116,16 +120,16 @@ fn bad_pair_decks_name_the_field() {
     let cases = [
         (
             edit(&base, "reference = \"lower_top\"", "reference = \"nope\""),
-            "pairs[0].reference: unknown surface `nope`",
+            "pairs[0].reference: unknown surface `nope`".to_string(),
         ),
         (
             edit(&base, "friction = 0.5", "friction = 0.5\ntied = true"),
-            "pairs[0].friction: a tied pair does not slip",
+            "pairs[0].friction: a tied pair does not slip".to_string(),
         ),
         (
             edit(&base, "tracked = \"upper_bottom\"", "tracked = \"top\"")
                 .replace("friction = 0.5", "friction = 0.5\nweights = \"mortar\""),
-            "pairs[0].weights: mortar weights integrate over the tracked faces",
+            "pairs[0].weights: mortar weights integrate over the tracked faces".to_string(),
         ),
         (
             edit(
@@ -133,17 +137,29 @@ fn bad_pair_decks_name_the_field() {
                 "tracked = \"upper_bottom\"",
                 "tracked = \"upper_top\"",
             ),
-            "pairs[0]: `interface`: none of the 25 tracked nodes of `upper_top` lies within",
+            "pairs[0]: `interface`: none of the 25 tracked nodes of `upper_top` lies within"
+                .to_string(),
         ),
         (
             edit(&base, "friction = 0.5", "friction = -0.5"),
-            "pairs[0].friction: expected a coefficient ≥ 0",
+            "pairs[0].friction: expected a coefficient ≥ 0".to_string(),
         ),
     ];
+    let bolt = include_str!("bolt-bar.toml");
+    let cases = cases.into_iter().chain([
+        (
+            edit(bolt, "lock_at = 1.0", "lock_at = 5.0"),
+            "bolts[0].lock_at: expected a time in (0, 2]".to_string(),
+        ),
+        (
+            edit(bolt, "name = \"bolt1\"", "name = \"glue\""),
+            "bolts[0].name: `glue` is also the name of pairs[0]".to_string(),
+        ),
+    ]);
     for (deck, want) in cases {
         let e = try_run_deck("pairs-bad", &deck).err().expect("refused");
         let msg = e.to_string();
-        assert!(msg.contains(want), "expected `{want}` in: {msg}");
+        assert!(msg.contains(&want), "expected `{want}` in: {msg}");
     }
 }
 
@@ -190,4 +206,41 @@ fn two_body_hertz_line_contact() {
     );
     assert!(f > 30.0, "force per length {f}");
     assert!(column(&out, "max_penetration").iter().all(|&g| g < 1e-10));
+}
+
+/// A bolt's pretension section (`tests/bolt-bar.toml`): a bar (E = 1000, ν = 0, A = 16,
+/// L = 40) clamped at both ends, in three parts joined by a tied pair at z = a = 10 and by
+/// the section at z = 20. The section pulls with F = 1000 × a ramp to t = 1, where it
+/// locks; then a force P = 400 along +z on the glued joint (a traction on its face)
+/// over t ∈ [1, 2]. Exact (1-D) answers: during pretension the bolt force is the
+/// prescribed one and the section shortens by F L/(EA) = 2.5; locked, it keeps that
+/// length and the bolt force falls to F − P a/L = 900 (the joint's load shared by the two
+/// segments in proportion to their stiffness).
+#[test]
+fn bolt_pretension_then_locked_section() {
+    let out = run_deck("pairs-bolt", include_str!("bolt-bar.toml"));
+    let t = column(&out, "time");
+    let force = column(&out, "bolt1.force");
+    let short = column(&out, "bolt1.shortening");
+    assert_eq!(t, vec![0.5, 1.0, 1.5, 2.0]);
+    for (k, &ti) in t.iter().enumerate() {
+        let want = if ti <= 1.0 {
+            1000.0 * ti
+        } else {
+            1000.0 - 400.0 * (ti - 1.0) * 10.0 / 40.0
+        };
+        assert!(
+            rel_err(force[k], want) < 1e-6,
+            "force {} at t = {ti}, want {want}",
+            force[k]
+        );
+        let s = if ti <= 1.0 { 2.5 * ti } else { 2.5 };
+        assert!(
+            rel_err(short[k], s) < 1e-6,
+            "shortening {} at t = {ti}",
+            short[k]
+        );
+    }
+    let base = column(&out, "bottom.fz");
+    assert!(rel_err(*base.last().unwrap(), -1300.0) < 1e-6, "{base:?}");
 }

@@ -184,6 +184,12 @@ pub struct PairEval {
     pub d: [f64; 3],
     /// The frame [n, t1, t2] now (rows).
     pub frame: [[f64; 3]; 3],
+    /// ∂r/∂s of a pretension shift s (see [`evaluate`]), the same rows as `r`.
+    pub dr_ds: Vec<f64>,
+    /// The normal force f_loc,N and its derivatives by the pair's unknowns (the same
+    /// order as `r`'s rows) and by s: a bolt section's force sums them.
+    pub dfn: Vec<f64>,
+    pub dfn_ds: f64,
 }
 
 /// Jacobian-only diagonal on multiplier rows (relative to κ), as for walls: keeps a
@@ -194,7 +200,9 @@ const JACOBIAN_REG: f64 = 1e-8;
 /// positions) with their weights `w` in x_m and their shape-function derivatives `dn`
 /// (∂N/∂ξ, ∂N/∂η at the node's point on its face; zero for nodes off that face) that
 /// give the frame; `lam` its multipliers (ignored without); `c_n`, `c_t` the gap
-/// offsets (see the module docs); `decision` the law's branch choice.
+/// offsets (see the module docs); `shift` s is added to the normal gap (a bolt's
+/// pretension section: g_N = n · (d − c_N) + s, so s > 0 pulls the two sides s into each
+/// other); `decision` the law's branch choice.
 #[allow(clippy::too_many_arguments)]
 pub fn evaluate(
     x: &[[f64; 3]],
@@ -203,6 +211,7 @@ pub fn evaluate(
     lam: [f64; 3],
     c_n: [f64; 3],
     c_t: [f64; 3],
+    shift: f64,
     law: &PairLaw,
     decision: Decision,
 ) -> PairEval {
@@ -230,7 +239,7 @@ pub fn evaluate(
         [d[0] - c_t[0], d[1] - c_t[1], d[2] - c_t[2]],
         [d[0] - c_t[0], d[1] - c_t[1], d[2] - c_t[2]],
     ];
-    let g = [dot(n, e[0]), dot(t1, e[1]), dot(t2, e[2])];
+    let g = [dot(n, e[0]) + shift, dot(t1, e[1]), dot(t2, e[2])];
 
     // The law: local force fl on the node, ∂fl/∂g, ∂fl/∂λ, and the multiplier rows.
     let mult = law.has_multipliers();
@@ -306,6 +315,7 @@ pub fn evaluate(
     let np = 1 + nf;
     let nr = 3 * np + if mult { 3 } else { 0 };
     let mut k = vec![0.0; nr * nr];
+    let mut dfn = vec![0.0; nr];
     let pn = projector(n, 1.0 / la);
     let p1 = projector(t1, 1.0 / l1);
     let (s1, s2, st1, sn) = (skew(a1), skew(a2), skew(t1), skew(n));
@@ -353,6 +363,9 @@ pub fn evaluate(
                     .sum()
             })
         });
+        for j in 0..3 {
+            dfn[3 * q + j] = dfl[0][j];
+        }
         // Rows: r_s = −f, r_a = N_a f, r_λ = ∂(−κ h) = k_lg ∂g.
         for row in 0..np {
             let w = if row == 0 { -1.0 } else { nn[row - 1] };
@@ -389,6 +402,21 @@ pub fn evaluate(
                 k[(3 * np + i) * nr + 3 * np + j] += k_ll[i][j];
             }
         }
+        for j in 0..3 {
+            dfn[3 * np + j] = dfdl[0][j];
+        }
+    }
+    // The shift enters g_N alone: ∂fl/∂s = ∂fl/∂g_N, ∂f/∂s = P ∂fl/∂g_N.
+    let df_ds: [f64; 3] = std::array::from_fn(|i| (0..3).map(|kk| cols[kk][i] * dfdg[kk][0]).sum());
+    let mut dr_ds = vec![0.0; nr];
+    for i in 0..3 {
+        dr_ds[i] = -df_ds[i];
+        for a in 0..nf {
+            dr_ds[3 * (1 + a) + i] = nn[a] * df_ds[i];
+        }
+        if mult {
+            dr_ds[3 * np + i] = k_lg[i][0];
+        }
     }
     let mut r = vec![0.0; nr];
     for i in 0..3 {
@@ -413,6 +441,9 @@ pub fn evaluate(
         ft_new,
         d,
         frame: cols,
+        dr_ds,
+        dfn,
+        dfn_ds: dfdg[0][0],
     }
 }
 
@@ -469,7 +500,17 @@ mod tests {
                     let mut x = vec![xs];
                     x.extend_from_slice(nodes);
                     let (w, dn) = face_shape(nodes.len(), xi);
-                    let base = evaluate(&x, &w, &dn, lam, [0.0; 3], c_t, law, Decision::Natural);
+                    let base = evaluate(
+                        &x,
+                        &w,
+                        &dn,
+                        lam,
+                        [0.0; 3],
+                        c_t,
+                        0.01,
+                        law,
+                        Decision::Natural,
+                    );
                     branches.insert(format!("{:?}", base.branch));
                     let forced = Decision::Forced(base.branch);
                     let nr = base.r.len();
@@ -485,7 +526,7 @@ mod tests {
                             } else {
                                 l[j - 3 * np] += s * h;
                             }
-                            evaluate(&y, &w, &dn, l, [0.0; 3], c_t, law, forced).r
+                            evaluate(&y, &w, &dn, l, [0.0; 3], c_t, 0.01, law, forced).r
                         };
                         let (rp, rm) = (at(1.0), at(-1.0));
                         for i in 0..nr {
@@ -498,6 +539,43 @@ mod tests {
                         "{law:?} at {xs:?}, {} nodes: off by {worst:e} (scale {scale:e})",
                         nodes.len()
                     );
+                    // The shift's column and the normal force's row.
+                    let at_s =
+                        |s: f64| evaluate(&x, &w, &dn, lam, [0.0; 3], c_t, 0.01 + s, law, forced);
+                    let (ep, em) = (at_s(h), at_s(-h));
+                    for i in 0..nr {
+                        let fd = (ep.r[i] - em.r[i]) / (2.0 * h);
+                        assert!(
+                            (fd - base.dr_ds[i]).abs() <= 1e-7 * scale.max(1.0),
+                            "{law:?}: ∂r{i}/∂s"
+                        );
+                    }
+                    let fd = (ep.normal_force - em.normal_force) / (2.0 * h);
+                    assert!(
+                        (fd - base.dfn_ds).abs() <= 1e-7 * scale.max(1.0),
+                        "{law:?}: ∂f_N/∂s"
+                    );
+                    for j in 0..nr {
+                        let (mut y, mut l) = (x.clone(), lam);
+                        let (mut y2, mut l2) = (x.clone(), lam);
+                        if j < 3 * np {
+                            y[j / 3][j % 3] += h;
+                            y2[j / 3][j % 3] -= h;
+                        } else {
+                            l[j - 3 * np] += h;
+                            l2[j - 3 * np] -= h;
+                        }
+                        let fp =
+                            evaluate(&y, &w, &dn, l, [0.0; 3], c_t, 0.01, law, forced).normal_force;
+                        let fm = evaluate(&y2, &w, &dn, l2, [0.0; 3], c_t, 0.01, law, forced)
+                            .normal_force;
+                        let fd = (fp - fm) / (2.0 * h);
+                        assert!(
+                            (fd - base.dfn[j]).abs() <= 1e-7 * scale.max(1.0),
+                            "{law:?}: ∂f_N/∂q{j}: {fd} vs {}",
+                            base.dfn[j]
+                        );
+                    }
                 }
             }
         }
@@ -531,6 +609,7 @@ mod tests {
             [0.0; 3],
             [0.0; 3],
             [0.0; 3],
+            0.0,
             &PairLaw::TiedPenalty { kp: 1.0 },
             Decision::Natural,
         );
@@ -545,6 +624,7 @@ mod tests {
             [0.0; 3],
             [0.0; 3],
             [0.0; 3],
+            0.0,
             &PairLaw::Penalty {
                 kp: 10.0,
                 mu: 0.0,

@@ -18,6 +18,7 @@ use super::local::{LocalElements, LocalMesh};
 use crate::contact::law::{AlmLaw, Branch, Decision, Threshold};
 use crate::contact::pair::{evaluate, PairLaw};
 use crate::contact::wall::ContactMethod;
+use crate::curve::Curve;
 use serde::{Deserialize, Serialize};
 
 /// One pair: the tracked node, its reference nodes with their weights in x_m and the
@@ -50,6 +51,24 @@ pub struct PairsDef {
     pub pairs: Vec<Pair>,
     /// Tracked nodes left without a pair (no reference face within reach).
     pub unpaired: usize,
+    /// A bolt's pretension section: tied pairs whose normal gap is shifted by one global
+    /// unknown s, the section's shortening.
+    #[serde(default)]
+    pub pretension: Option<Pretension>,
+}
+
+/// A pretension section (Abaqus `*PRE-TENSION SECTION`, LS-DYNA
+/// `*INITIAL_STRESS_SECTION`): until `lock_at` the shortening s is free and the
+/// section carries the tension `force × curve(t)` (the sum of its pairs' normal forces
+/// pulls the two sides together by that much); from `lock_at` on s keeps the value it
+/// reached, and the bolt's force follows the service loads.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct Pretension {
+    pub force: f64,
+    pub curve: Curve,
+    pub lock_at: f64,
+    /// The rank that owns s (the one with most of the section's pairs).
+    pub owner: usize,
 }
 
 impl ContributionKind for PairsDef {
@@ -60,6 +79,22 @@ impl ContributionKind for PairsDef {
         &self.name
     }
     fn describe(&self) -> String {
+        if let Some(p) = &self.pretension {
+            return format!(
+                "bolt {}: pretension {} locked at t = {}, section {} tied to {} ({} pairs{})",
+                self.name,
+                p.force,
+                p.lock_at,
+                self.tracked,
+                self.reference,
+                self.pairs.len(),
+                if self.unpaired > 0 {
+                    format!(", {} nodes left without a face in reach", self.unpaired)
+                } else {
+                    String::new()
+                }
+            );
+        }
         format!(
             "pairs {}: {}{}, μ = {}, {} tracked nodes of {} paired with faces of {}{}",
             self.name,
@@ -80,7 +115,8 @@ impl ContributionKind for PairsDef {
         self.pairs.iter().map(|p| p.node).collect()
     }
     fn extra_unknowns(&self) -> usize {
-        if self.method == ContactMethod::Alm {
+        let s = if self.pretension.is_some() { 3 } else { 0 };
+        s + if self.method == ContactMethod::Alm {
             3 * self.pairs.len()
         } else {
             0
@@ -111,8 +147,19 @@ impl ContributionKind for PairsDef {
             })
             .collect();
         mine.sort_by_key(|p| p.node);
+        // s belongs to the rank owning most of the section's tracked nodes (the lowest
+        // on a tie): the same on every rank.
+        let pretension = self.pretension.as_ref().map(|p| {
+            let mut per_rank = vec![0usize; l.ranks];
+            for q in &self.pairs {
+                per_rank[l.owner[q.node] as usize] += 1;
+            }
+            let owner = (0..l.ranks).fold(0, |b, r| if per_rank[r] > per_rank[b] { r } else { b });
+            Pretension { owner, ..p.clone() }
+        });
         Self {
             pairs: mine,
+            pretension,
             ..self.clone()
         }
     }
@@ -161,6 +208,13 @@ pub struct Pairs {
     ft_new: Vec<[f64; 3]>,
     last: Vec<PairState>,
     started: bool,
+    /// A pretension section: the local block of s (its first component), whether this
+    /// rank owns it, the time of the last evaluation, and s where it was locked.
+    s_block: Option<usize>,
+    s_owner: bool,
+    t_new: f64,
+    s_new: f64,
+    s_lock: Option<f64>,
 }
 
 impl Pairs {
@@ -177,6 +231,11 @@ impl Pairs {
             ft_new: vec![[0.0; 3]; n],
             last: vec![PairState::default(); n],
             started: false,
+            s_block: None,
+            s_owner: false,
+            t_new: 0.0,
+            s_new: 0.0,
+            s_lock: None,
             def,
         }
     }
@@ -230,6 +289,7 @@ impl Pairs {
                 [0.0; 3],
                 [0.0; 3],
                 [0.0; 3],
+                0.0,
                 &PairLaw::TiedPenalty { kp: 0.0 },
                 Decision::Natural,
             );
@@ -241,9 +301,13 @@ impl Pairs {
     }
 }
 
-/// Column layout: force on the tracked side (3), active pairs, largest slip, then the
-/// shared ones.
-const N_OWN_COLUMNS: usize = 5;
+/// Column layout: force on the tracked side (3), active pairs, largest slip, for a
+/// pretension section its tension and shortening, then the shared ones.
+impl Pairs {
+    fn n_own_columns(&self) -> usize {
+        5 + 2 * self.def.pretension.is_some() as usize
+    }
+}
 
 impl Contribution for Pairs {
     fn name(&self) -> &str {
@@ -251,18 +315,35 @@ impl Contribution for Pairs {
     }
     /// ALM (tied or not): three multipliers per pair, owned with its tracked node.
     fn unknowns(&self) -> Unknowns {
-        Unknowns {
-            owned: if self.is_alm() {
-                self.def.pairs.len()
-            } else {
-                0
+        let owned = if self.is_alm() {
+            self.def.pairs.len()
+        } else {
+            0
+        };
+        match &self.def.pretension {
+            Some(p) => Unknowns {
+                owned,
+                global: 1,
+                owner: p.owner,
+                reads_global: true,
             },
-            ..Unknowns::default()
+            None => Unknowns {
+                owned,
+                ..Unknowns::default()
+            },
         }
     }
     fn bind(&mut self, dofs: &DofMap, index: usize) {
+        let placed = dofs.placed(index);
         if self.is_alm() {
-            self.mult = Some(dofs.placed(index).owned_local);
+            self.mult = Some(placed.owned_local);
+        }
+        if self.def.pretension.is_some() {
+            self.s_block = Some(
+                dofs.local_block(placed.global_first)
+                    .expect("every rank reads a section's shortening"),
+            );
+            self.s_owner = dofs.owned_index(3 * self.s_block.unwrap_or(0)).is_some();
         }
     }
     fn pattern(&self, dofs: &DofMap, out: &mut Vec<(usize, usize)>) {
@@ -279,6 +360,31 @@ impl Contribution for Pairs {
                     out.push((a, b));
                 }
             }
+            if let Some(sb) = self.s_block {
+                let s = dofs.global_block(sb);
+                for &a in &blocks {
+                    out.extend_from_slice(&[(a, s), (s, a)]);
+                }
+            }
+        }
+        if let Some(sb) = self.s_block {
+            if self.s_owner || !self.def.pairs.is_empty() {
+                let s = dofs.global_block(sb);
+                out.push((s, s));
+            }
+        }
+    }
+
+    /// A section's shortening: its two unused components always, and s itself from the
+    /// lock on (the value it had then).
+    fn prescribed(&self, _t: f64, dofs: &DofMap, out: &mut Vec<(usize, f64)>) {
+        let Some(sb) = self.s_block.filter(|_| self.s_owner) else {
+            return;
+        };
+        let i = dofs.owned_index(3 * sb).expect("the owner owns s");
+        out.extend_from_slice(&[(i + 1, 0.0), (i + 2, 0.0)]);
+        if let Some(s) = self.s_lock {
+            out.push((i, s));
         }
     }
 
@@ -303,6 +409,26 @@ impl Contribution for Pairs {
         if !self.started {
             self.start(ev.coords);
         }
+        self.t_new = ev.t;
+        let s = self.s_block.map_or(0.0, |sb| ev.u[3 * sb]);
+        if let (Some(sb), Some(p)) = (self.s_block, &self.def.pretension) {
+            if self.s_owner {
+                // r_s = Σ f_N + T(t): the section's pairs pull its sides together by T.
+                if let Some((_, f_ext)) = ev.forces.as_mut() {
+                    f_ext[3 * sb] -= p.force * p.curve.eval(ev.t);
+                }
+                if let Some(k) = ev.jacobian.as_deref_mut() {
+                    let g = ev.dofs.global_block(sb);
+                    // Jacobian-only diagonal on the two unused (prescribed) components.
+                    let mean = self.kappa.iter().sum::<f64>() / self.kappa.len().max(1) as f64;
+                    let d = (1e-8 * mean).max(f64::MIN_POSITIVE);
+                    k.add_block(g, g, &[0.0, 0.0, 0.0, 0.0, d, 0.0, 0.0, 0.0, d]);
+                }
+            }
+            if !ev.frozen {
+                self.s_new = s;
+            }
+        }
         for j in 0..self.def.pairs.len() {
             let x = self.positions(j, ev.coords, ev.u);
             let lam = match self.mult {
@@ -324,7 +450,7 @@ impl Contribution for Pairs {
             };
             let law = self.law(j);
             let p = &self.def.pairs[j];
-            let e = evaluate(&x, &p.w, &p.dn, lam, c_n, c_t, &law, decision);
+            let e = evaluate(&x, &p.w, &p.dn, lam, c_n, c_t, s, &law, decision);
             let nodes: Vec<usize> = std::iter::once(p.node)
                 .chain(p.nodes.iter().copied())
                 .collect();
@@ -340,6 +466,9 @@ impl Contribution for Pairs {
                         f_int[3 * (m0 + j) + c] += e.r[3 * np + c];
                     }
                 }
+                if let Some(sb) = self.s_block {
+                    f_int[3 * sb] += e.normal_force;
+                }
             }
             if let Some(k) = ev.jacobian.as_deref_mut() {
                 let mut blocks: Vec<usize> =
@@ -354,6 +483,25 @@ impl Contribution for Pairs {
                             std::array::from_fn(|t| e.k[(3 * bi + t / 3) * nr + 3 * bj + t % 3]);
                         k.add_block(a, b, &blk);
                     }
+                }
+                if let Some(sb) = self.s_block {
+                    let sg = ev.dofs.global_block(sb);
+                    for (bi, &a) in blocks.iter().enumerate() {
+                        let col: [f64; 9] = std::array::from_fn(|t| {
+                            if t % 3 == 0 {
+                                e.dr_ds[3 * bi + t / 3]
+                            } else {
+                                0.0
+                            }
+                        });
+                        k.add_block(a, sg, &col);
+                        let row: [f64; 9] =
+                            std::array::from_fn(|t| if t < 3 { e.dfn[3 * bi + t] } else { 0.0 });
+                        k.add_block(sg, a, &row);
+                    }
+                    let mut ss = [0.0; 9];
+                    ss[0] = e.dfn_ds;
+                    k.add_block(sg, sg, &ss);
                 }
             }
             if ev.frozen {
@@ -382,6 +530,11 @@ impl Contribution for Pairs {
     fn commit(&mut self) {
         self.d_old.copy_from_slice(&self.d_new);
         self.ft_old.copy_from_slice(&self.ft_new);
+        if let Some(p) = &self.def.pretension {
+            if self.s_lock.is_none() && self.t_new >= p.lock_at - 1e-12 * p.lock_at.abs().max(1.0) {
+                self.s_lock = Some(self.s_new);
+            }
+        }
     }
 
     /// `<pairs>.fx/.fy/.fz`: the force on the tracked side (its reaction on the
@@ -404,6 +557,10 @@ impl Contribution for Pairs {
             run_max: true,
             ..Column::sum(format!("{w}.max_slip"))
         });
+        if self.def.pretension.is_some() {
+            c.push(Column::sum(format!("{w}.force")));
+            c.push(Column::sum(format!("{w}.shortening")));
+        }
         c.push(Column {
             reduce: Reduce::Max,
             shared: true,
@@ -420,20 +577,28 @@ impl Contribution for Pairs {
         c
     }
     fn column_values(&self, _s: &State, out: &mut [f64]) {
+        let own = self.n_own_columns();
+        let bolt = self.def.pretension.is_some();
+        if bolt && self.s_owner {
+            out[6] = self.s_new;
+        }
         for p in &self.last {
             for i in 0..3 {
                 out[i] += p.force[i];
             }
             out[4] = out[4].max(p.slip);
+            if bolt {
+                out[5] -= p.normal_force;
+            }
             if p.active {
                 out[3] += 1.0;
-                out[N_OWN_COLUMNS + 1] += 1.0;
+                out[own + 1] += 1.0;
             }
             if !self.def.tied && p.gap < 0.0 {
-                out[N_OWN_COLUMNS] = out[N_OWN_COLUMNS].max(-p.gap);
+                out[own] = out[own].max(-p.gap);
             }
             if p.sticking {
-                out[N_OWN_COLUMNS + 2] += 1.0;
+                out[own + 2] += 1.0;
             }
         }
     }

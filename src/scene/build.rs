@@ -560,14 +560,15 @@ pub fn build(deck: &Deck, deck_dir: &Path) -> Result<Scene> {
             analysis: deck.analysis.kind,
         },
     )?;
-    let pairs = super::pairs::build_pairs(
-        &deck.pairs,
-        &super::pairs::PairInputs {
-            mesh: &mesh,
-            surfaces: &surfaces,
-            set_nodes: &set_nodes,
-        },
-    )?;
+    let pair_inputs = super::pairs::PairInputs {
+        mesh: &mesh,
+        surfaces: &surfaces,
+        set_nodes: &set_nodes,
+        curve: &curve,
+        end_time: deck.analysis.end_time,
+    };
+    let pairs = super::pairs::build_pairs(&deck.pairs, &pair_inputs)?;
+    let bolts = super::pairs::build_bolts(&deck.bolts, &pair_inputs)?;
     // Walls and couplings name history columns (`<name>.fx`), as reaction and
     // displacement sets do: a name may stand for one of them only.
     let mut column_owner: BTreeMap<&str, String> = BTreeMap::new();
@@ -594,6 +595,10 @@ pub fn build(deck: &Deck, deck_dir: &Path) -> Result<Scene> {
             "pairs",
             deck.pairs.iter().map(|c| c.name.as_str()).collect(),
         ),
+        (
+            "bolts",
+            deck.bolts.iter().map(|c| c.name.as_str()).collect(),
+        ),
     ];
     for (what, names) in &named {
         for (i, &n) in names.iter().enumerate() {
@@ -611,6 +616,7 @@ pub fn build(deck: &Deck, deck_dir: &Path) -> Result<Scene> {
     contributions.extend(entities.into_iter().map(ContributionDef::Wall));
     contributions.extend(couplings.into_iter().map(ContributionDef::Coupling));
     contributions.extend(pairs.into_iter().map(ContributionDef::Pairs));
+    contributions.extend(bolts.into_iter().map(ContributionDef::Pairs));
     let partition = match &deck.partition {
         None => crate::partition::Method::Metis,
         Some(p) => match (p.method, p.axis) {
@@ -704,6 +710,7 @@ fn curve_breakpoints(deck: &Deck) -> Vec<f64> {
         .iter()
         .flat_map(|c| c.points.iter().map(|p| p[0]))
         .chain(segments)
+        .chain(deck.bolts.iter().map(|b| b.lock_at))
         .filter(|&t| t > 0.0 && t < end && t.is_finite())
         .collect();
     t.sort_by(f64::total_cmp);

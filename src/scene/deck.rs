@@ -45,6 +45,9 @@ pub struct Deck {
     /// Small-sliding contact between deformable parts (the paper's §3.7).
     #[serde(default)]
     pub pairs: Vec<super::pairs::PairsDeck>,
+    /// Bolt pretension sections (tied across a cut, pretensioned, then locked).
+    #[serde(default)]
+    pub bolts: Vec<super::pairs::BoltDeck>,
     /// How the elements are split over ranks (default METIS).
     #[serde(default)]
     pub partition: Option<PartitionDeck>,

@@ -10,7 +10,7 @@ use crate::contact::pair::{face_shape, on_face, project_on_face};
 use crate::contact::wall::ContactMethod;
 use crate::mesh::select::tributary_areas;
 use crate::mesh::{FaceRef, Mesh};
-use crate::model::pairs::{Pair, PairsDef};
+use crate::model::pairs::{Pair, PairsDef, Pretension};
 use crate::Result;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
@@ -108,11 +108,83 @@ fn mortar_integrals(
     (m, d_t)
 }
 
+/// One `[[bolts]]` entry: a bolt's pretension section, the two faces of a cut through
+/// its shank (two parts meeting there, or a part split in two), tied by mortar pairs
+/// whose normal gap is shifted by the section's shortening (see
+/// [`crate::model::pairs::Pretension`]).
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct BoltDeck {
+    pub name: String,
+    /// The cut's two faces: surfaces of the two sides (the tension pulls `tracked`
+    /// toward `reference`).
+    pub tracked: String,
+    pub reference: String,
+    /// The pretension (a force), times `curve` (default: a ramp over the analysis).
+    pub force: f64,
+    #[serde(default)]
+    pub curve: Option<String>,
+    /// From this time on the section keeps the length it has then.
+    pub lock_at: f64,
+    #[serde(default)]
+    pub kappa: Option<f64>,
+    #[serde(default)]
+    pub search_distance: Option<f64>,
+}
+
 /// What building pairs needs from the rest of the deck.
 pub struct PairInputs<'a> {
     pub mesh: &'a Mesh,
     pub surfaces: &'a BTreeMap<String, Vec<FaceRef>>,
     pub set_nodes: &'a dyn Fn(String, &str) -> Result<Vec<usize>>,
+    pub curve: &'a dyn Fn(String, &Option<String>) -> Result<crate::curve::Curve>,
+    pub end_time: f64,
+}
+
+/// Every `[[bolts]]` entry: tied mortar pairs across the cut with a pretension.
+pub fn build_bolts(decks: &[BoltDeck], inp: &PairInputs) -> Result<Vec<PairsDef>> {
+    decks
+        .iter()
+        .enumerate()
+        .map(|(i, b)| {
+            let f = format!("bolts[{i}]");
+            if !b.force.is_finite() {
+                return Err(err(format!("{f}.force"), "expected a finite force"));
+            }
+            if !(b.lock_at > 0.0 && b.lock_at <= inp.end_time) {
+                return Err(err(
+                    format!("{f}.lock_at"),
+                    format!(
+                        "expected a time in (0, {}] (the analysis' end), got {}",
+                        inp.end_time, b.lock_at
+                    ),
+                ));
+            }
+            let curve = (inp.curve)(format!("{f}.curve"), &b.curve)?;
+            let pairs = PairsDeck {
+                name: b.name.clone(),
+                tracked: b.tracked.clone(),
+                reference: b.reference.clone(),
+                method: ContactMethod::Alm,
+                tied: true,
+                friction: 0.0,
+                kappa: b.kappa,
+                penalty_scale: 1.0,
+                tangential_augmentation: None,
+                friction_threshold: Threshold::default(),
+                search_distance: b.search_distance,
+                weights: None,
+            };
+            let mut def = build_one(&pairs, &f, inp)?;
+            def.pretension = Some(Pretension {
+                force: b.force,
+                curve,
+                lock_at: b.lock_at,
+                owner: 0,
+            });
+            Ok(def)
+        })
+        .collect()
 }
 
 /// Every `[[pairs]]` entry, paired.
@@ -319,5 +391,6 @@ fn build_one(d: &PairsDeck, f: &str, inp: &PairInputs) -> Result<PairsDef> {
         reference: d.reference.clone(),
         pairs,
         unpaired,
+        pretension: None,
     })
 }
