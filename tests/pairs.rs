@@ -148,6 +148,10 @@ fn bad_pair_decks_name_the_field() {
     let bolt = include_str!("bolt-bar.toml");
     let cases = cases.into_iter().chain([
         (
+            format!("{base}\n[solver.linear]\npreconditioner = \"amg\"\n"),
+            "[solver.linear] preconditioner: \"amg\" needs an elliptic matrix".to_string(),
+        ),
+        (
             edit(bolt, "lock_at = 1.0", "lock_at = 5.0"),
             "bolts[0].lock_at: expected a time in (0, 2]".to_string(),
         ),

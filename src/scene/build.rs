@@ -541,6 +541,16 @@ pub fn build(deck: &Deck, deck_dir: &Path) -> Result<Scene> {
         }
     }
 
+    if (!deck.pairs.is_empty() || !deck.bolts.is_empty())
+        && deck.solver.linear.preconditioner == crate::linalg::PcKind::Amg
+    {
+        return Err(err(
+            "[solver.linear] preconditioner",
+            "\"amg\" needs an elliptic matrix, but [[pairs]] and [[bolts]] couple each \
+             multiplier to a node and a reference face on another part (measured on \
+             two-body-hertz: a condensed diagonal turns negative); use \"block-jacobi\" or \"asm\"",
+        ));
+    }
     if !deck.couplings.is_empty() && deck.solver.linear.preconditioner == crate::linalg::PcKind::Amg
     {
         return Err(err(
@@ -675,6 +685,11 @@ pub fn amg_unsuited(deck: &Deck) -> Option<String> {
     }
     if !deck.entities.is_empty() {
         return Some("[[entities]] add rigid-body unknowns".into());
+    }
+    if !deck.pairs.is_empty() || !deck.bolts.is_empty() {
+        return Some(
+            "[[pairs]] or [[bolts]] tie deformable parts by multipliers over several nodes".into(),
+        );
     }
     if let Some(m) = deck.materials.iter().find(|m| m.nu > AUTO_AMG_MAX_NU) {
         return Some(format!(
