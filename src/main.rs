@@ -17,7 +17,8 @@ usage:
       --repartition      recompute a cached partition instead of using it
       --quiet            no progress lines
       --solver S         newton | bfgs | jfnk (overrides the deck's [solver] nonlinear)
-      --contact M        alm | penalty (switches every [[walls]] entry of the scene)
+      --contact M        alm | penalty (switches every [[walls]], [[entities]] and [[pairs]]
+                         entry of the scene; [[bolts]] sections stay tied by ALM)
   alfe scenes                            list the built-in scenes
   alfe scene show NAME                   print a built-in scene's deck
   alfe check SCENE|DECK [--ranks N]      validate; print model size and partition quality

@@ -207,16 +207,17 @@ pub fn dual_coefficients(x: &[[f64; 3]]) -> (Vec<Vec<f64>>, Vec<f64>) {
 
 /// ∫ Φ_t N_a over the overlap of a tracked face `xs` (nodes' positions; `a` its dual
 /// coefficients) with a reference face `xm`, as (t, a, value) with t, a local to the
-/// faces; empty where they do not overlap or face the same way.
+/// faces; empty where they do not overlap or face the same way. Err if a quadrature
+/// point has no parameters on one of the faces (a degenerate face).
 pub fn overlap_integrals(
     xs: &[[f64; 3]],
     a: &[Vec<f64>],
     xm: &[[f64; 3]],
-) -> Vec<(usize, usize, f64)> {
+) -> Result<Vec<(usize, usize, f64)>, String> {
     let ps = Plane::of(xs);
     let pm = Plane::of(xm);
     if dot(ps.n, pm.n) >= 0.0 {
-        return Vec::new();
+        return Ok(Vec::new());
     }
     let s2: Vec<[f64; 2]> = xs.iter().map(|&p| ps.to2(p)).collect();
     let mut m2: Vec<[f64; 2]> = xm.iter().map(|&p| ps.to2(p)).collect();
@@ -229,7 +230,7 @@ pub fn overlap_integrals(
     }
     let poly = clip_polygon(&s2c, &m2);
     if poly.len() < 3 || area2(&poly).abs() <= 1e-14 * area2(&s2c).abs() {
-        return Vec::new();
+        return Ok(Vec::new());
     }
     let (ns, nm) = (xs.len(), xm.len());
     let mut out = vec![0.0; ns * nm];
@@ -252,7 +253,9 @@ pub fn overlap_integrals(
             let (Some((eta, _)), Some((xi, _))) =
                 (project_on_face(x3, xs), project_on_face(x3, xm))
             else {
-                continue;
+                return Err(format!(
+                    "no closest point on a face for the overlap point {x3:?} (a degenerate face?)"
+                ));
             };
             let (nsv, _) = face_shape(ns, eta);
             let (nmv, _) = face_shape(nm, xi);
@@ -268,11 +271,11 @@ pub fn overlap_integrals(
             }
         }
     }
-    (0..ns)
+    Ok((0..ns)
         .flat_map(|t| (0..nm).map(move |m| (t, m)))
         .map(|(t, m)| (t, m, out[t * nm + m]))
         .filter(|e| e.2 != 0.0)
-        .collect()
+        .collect())
 }
 
 /// The tracked face's area element relative to its plane's at η: |a1 × a2| over the
@@ -391,7 +394,7 @@ mod tests {
                 [i0 + 0.5, j0 + 0.5, 0.0],
                 [i0 + 0.5, j0, 0.0],
             ];
-            for (t, _, v) in overlap_integrals(&xs, &a, &xm) {
+            for (t, _, v) in overlap_integrals(&xs, &a, &xm).unwrap() {
                 row[t] += v;
                 col_total += v;
             }

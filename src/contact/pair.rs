@@ -88,10 +88,23 @@ fn projector(v: [f64; 3], scale: f64) -> M3 {
 
 /// The closest point of x on a face (its nodes' positions `xa`): ξ by Newton on
 /// min |x − x(ξ)|² from the centre (Gauss–Newton with the exact second term for the
-/// bilinear quad), and the distance. None if Newton does not settle (a degenerate face).
+/// bilinear quad), and the distance. Coordinates are taken relative to the face's
+/// centroid, so a model far from the origin converges as one at it. None if Newton does
+/// not settle (a degenerate face).
 pub fn project_on_face(x: [f64; 3], xa: &[[f64; 3]]) -> Option<([f64; 2], f64)> {
     let nf = xa.len();
+    let c: [f64; 3] = std::array::from_fn(|k| xa.iter().map(|p| p[k]).sum::<f64>() / nf as f64);
+    let x = [x[0] - c[0], x[1] - c[1], x[2] - c[2]];
+    let xa: Vec<[f64; 3]> = xa
+        .iter()
+        .map(|p| [p[0] - c[0], p[1] - c[1], p[2] - c[2]])
+        .collect();
     let mut xi = if nf == 3 { [1.0 / 3.0; 2] } else { [0.0; 2] };
+    let point = |xi: [f64; 2]| -> [f64; 3] {
+        let (n, _) = face_shape(nf, xi);
+        std::array::from_fn(|k| (0..nf).map(|a| n[a] * xa[a][k]).sum())
+    };
+    let mut last = f64::INFINITY;
     for _ in 0..50 {
         let (n, dn) = face_shape(nf, xi);
         let mut p = [0.0; 3];
@@ -120,7 +133,7 @@ pub fn project_on_face(x: [f64; 3], xa: &[[f64; 3]]) -> Option<([f64; 2], f64)> 
             [dot(a[1], a[0]) - dot(a12, r), dot(a[1], a[1])],
         ];
         let det = h[0][0] * h[1][1] - h[0][1] * h[1][0];
-        if det.abs() <= 1e-300 {
+        if det.abs() <= 1e-300 || !det.is_finite() {
             return None;
         }
         let dxi = [
@@ -128,16 +141,14 @@ pub fn project_on_face(x: [f64; 3], xa: &[[f64; 3]]) -> Option<([f64; 2], f64)> 
             (h[0][0] * g[1] - h[1][0] * g[0]) / det,
         ];
         xi = [xi[0] + dxi[0], xi[1] + dxi[1]];
-        if dxi[0].abs() + dxi[1].abs() < 1e-14 {
-            let (n, _) = face_shape(nf, xi);
-            let mut p = [0.0; 3];
-            for k in 0..nf {
-                for c in 0..3 {
-                    p[c] += n[k] * xa[k][c];
-                }
-            }
+        let step = dxi[0].abs() + dxi[1].abs();
+        // ξ is dimensionless: round-off leaves it at ~1e-15; stop there, or where the
+        // steps stop shrinking at that level.
+        if step < 1e-13 || (step < 1e-10 && step >= last) {
+            let p = point(xi);
             return Some((xi, norm([x[0] - p[0], x[1] - p[1], x[2] - p[2]])));
         }
+        last = step;
     }
     None
 }
@@ -580,11 +591,8 @@ mod tests {
             }
         }
         // The cases reach stick, slip and separation of the ALM law.
-        for t in [Tangential::Stick, Tangential::Slip] {
-            assert!(
-                branches.iter().any(|b| b.contains(&format!("{t:?}"))),
-                "{branches:?}"
-            );
+        for t in ["Stick", "Slip", "active: false"] {
+            assert!(branches.iter().any(|b| b.contains(t)), "{t}: {branches:?}");
         }
     }
 

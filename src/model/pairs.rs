@@ -172,8 +172,12 @@ impl ContributionKind for PairsDef {
             self.name
         ))
     }
+    /// Switches a contact's enforcement; a bolt's section stays ALM (a penalty tie
+    /// lets the section creep: 6 % on `tests/bolt-bar.toml`).
     fn set_contact_method(&mut self, m: ContactMethod) {
-        self.method = m;
+        if self.pretension.is_none() {
+            self.method = m;
+        }
     }
 }
 
@@ -603,16 +607,17 @@ impl Contribution for Pairs {
         }
     }
     fn summary(&self, values: &[f64]) -> Option<SummaryEntry> {
-        Some((
-            "pairs",
-            self.def.name.clone(),
-            serde_json::json!({
-                "force": [values[0], values[1], values[2]],
-                "active": values[3],
-                "max_slip": values[4],
-                "pairs": self.def.pairs.len(),
-            }),
-        ))
+        let mut v = serde_json::json!({
+            "force": [values[0], values[1], values[2]],
+            "active": values[3],
+            "max_slip": values[4],
+            "pairs": self.def.pairs.len(),
+        });
+        if self.def.pretension.is_some() {
+            v["bolt_force"] = values[5].into();
+            v["shortening"] = values[6].into();
+        }
+        Some(("pairs", self.def.name.clone(), v))
     }
 
     /// On the tracked nodes: the normal gap, the pressure (normal force / tributary

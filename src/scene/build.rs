@@ -576,6 +576,7 @@ pub fn build(deck: &Deck, deck_dir: &Path) -> Result<Scene> {
         set_nodes: &set_nodes,
         curve: &curve,
         end_time: deck.analysis.end_time,
+        analysis: deck.analysis.kind,
     };
     let pairs = super::pairs::build_pairs(&deck.pairs, &pair_inputs)?;
     let bolts = super::pairs::build_bolts(&deck.bolts, &pair_inputs)?;

@@ -68,12 +68,13 @@ fn one() -> f64 {
 /// number), and D_t = ∫ N_t, over the tracked faces ([`crate::contact::mortar`]).
 #[allow(clippy::type_complexity)]
 fn mortar_integrals(
+    f: &str,
     mesh: &Mesh,
     tracked: &[FaceRef],
     ref_nodes: &[Vec<usize>],
     ref_x: &[Vec<[f64; 3]>],
     reach: f64,
-) -> (BTreeMap<usize, BTreeMap<usize, f64>>, BTreeMap<usize, f64>) {
+) -> Result<(BTreeMap<usize, BTreeMap<usize, f64>>, BTreeMap<usize, f64>)> {
     let mut m: BTreeMap<usize, BTreeMap<usize, f64>> = BTreeMap::new();
     let mut d_t: BTreeMap<usize, f64> = BTreeMap::new();
     let bbox = |x: &[[f64; 3]]| -> ([f64; 3], [f64; 3]) {
@@ -97,7 +98,16 @@ fn mortar_integrals(
             if ref_nodes[k].iter().any(|r| tn.contains(r)) {
                 continue;
             }
-            for (t, r, v) in overlap_integrals(&xs, &a, &ref_x[k]) {
+            let ov = overlap_integrals(&xs, &a, &ref_x[k]).map_err(|why| {
+                err(
+                    f,
+                    format!(
+                        "mortar integrals of the tracked face with nodes {tn:?} over the reference face with nodes {:?}: {why}",
+                        ref_nodes[k]
+                    ),
+                )
+            })?;
+            for (t, r, v) in ov {
                 *m.entry(tn[t])
                     .or_default()
                     .entry(ref_nodes[k][r])
@@ -105,7 +115,7 @@ fn mortar_integrals(
             }
         }
     }
-    (m, d_t)
+    Ok((m, d_t))
 }
 
 /// One `[[bolts]]` entry: a bolt's pretension section, the two faces of a cut through
@@ -139,6 +149,7 @@ pub struct PairInputs<'a> {
     pub set_nodes: &'a dyn Fn(String, &str) -> Result<Vec<usize>>,
     pub curve: &'a dyn Fn(String, &Option<String>) -> Result<crate::curve::Curve>,
     pub end_time: f64,
+    pub analysis: crate::solve::AnalysisKind,
 }
 
 /// Every `[[bolts]]` entry: tied mortar pairs across the cut with a pretension.
@@ -148,6 +159,12 @@ pub fn build_bolts(decks: &[BoltDeck], inp: &PairInputs) -> Result<Vec<PairsDef>
         .enumerate()
         .map(|(i, b)| {
             let f = format!("bolts[{i}]");
+            if inp.analysis != crate::solve::AnalysisKind::Static {
+                return Err(err(
+                    &f,
+                    "bolt sections take part in static analyses (their lock must end a step, which only static stepping guarantees)",
+                ));
+            }
             if !b.force.is_finite() {
                 return Err(err(format!("{f}.force"), "expected a finite force"));
             }
@@ -160,7 +177,11 @@ pub fn build_bolts(decks: &[BoltDeck], inp: &PairInputs) -> Result<Vec<PairsDef>
                     ),
                 ));
             }
-            let curve = (inp.curve)(format!("{f}.curve"), &b.curve)?;
+            // Without a curve the pretension ramps up to `lock_at` and holds.
+            let curve = match &b.curve {
+                None => crate::curve::Curve::ramp(b.lock_at),
+                Some(_) => (inp.curve)(format!("{f}.curve"), &b.curve)?,
+            };
             let pairs = PairsDeck {
                 name: b.name.clone(),
                 tracked: b.tracked.clone(),
@@ -282,7 +303,7 @@ fn build_one(d: &PairsDeck, f: &str, inp: &PairInputs) -> Result<PairsDef> {
     };
     let mortar = match (weights, tracked_faces) {
         (Weights::Mortar, Some(tf)) => {
-            Some(mortar_integrals(mesh, tf, &face_nodes, &face_x, reach))
+            Some(mortar_integrals(f, mesh, tf, &face_nodes, &face_x, reach)?)
         }
         _ => None,
     };
@@ -310,6 +331,30 @@ fn build_one(d: &PairsDeck, f: &str, inp: &PairInputs) -> Result<PairsDef> {
             if !on_face(xs.len(), xi, 1e-8) || dist > reach {
                 continue;
             }
+            // The face must face the node (or the node sit just behind it): a thin part's
+            // far side is not its contact surface.
+            let (nv, dv) = face_shape(xs.len(), xi);
+            let mut a1 = [0.0; 3];
+            let mut a2 = [0.0; 3];
+            let mut p = [0.0; 3];
+            for (q, xq) in xs.iter().enumerate() {
+                for c in 0..3 {
+                    a1[c] += dv[q][0] * xq[c];
+                    a2[c] += dv[q][1] * xq[c];
+                    p[c] += nv[q] * xq[c];
+                }
+            }
+            let nrm = [
+                a1[1] * a2[2] - a1[2] * a2[1],
+                a1[2] * a2[0] - a1[0] * a2[2],
+                a1[0] * a2[1] - a1[1] * a2[0],
+            ];
+            let len = (nrm[0] * nrm[0] + nrm[1] * nrm[1] + nrm[2] * nrm[2]).sqrt();
+            let side =
+                (0..3).map(|c| nrm[c] * (x[c] - p[c])).sum::<f64>() / len.max(f64::MIN_POSITIVE);
+            if side < -0.1 * reach {
+                continue;
+            }
             if best.is_none_or(|b| dist < b.0) {
                 best = Some((dist, k, xi));
             }
@@ -329,11 +374,20 @@ fn build_one(d: &PairsDeck, f: &str, inp: &PairInputs) -> Result<PairsDef> {
                 };
                 // Mortar: the weights M_ta / Σ_a M_ta over every reference node the
                 // node's dual function overlaps; the frame still from its face at ξ.
+                // A node whose dual function is only partly covered (at the rim of the
+                // reference surface) would get weights well outside [0, 1] (dual functions
+                // change sign): it keeps node-to-face weights.
                 let row = m.get(&n).cloned().unwrap_or_default();
                 let covered: f64 = row.values().sum();
                 let full = d_t.get(&n).copied().unwrap_or(0.0);
-                if !(covered > 0.5 * full && full > 0.0) {
-                    unpaired += 1;
+                if !(full > 0.0 && (covered - full).abs() <= 1e-6 * full) {
+                    pairs.push(Pair {
+                        node: n,
+                        nodes: face_nodes[k].clone(),
+                        w,
+                        dn,
+                        area: areas.get(&n).copied().unwrap_or(0.0),
+                    });
                     continue;
                 }
                 let mut nodes_all: Vec<usize> = row.keys().copied().collect();
