@@ -8,4 +8,5 @@ pub mod mortar;
 pub mod motion;
 pub mod pair;
 pub mod shape;
+pub mod vec3;
 pub mod wall;

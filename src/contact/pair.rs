@@ -21,6 +21,7 @@
 #![allow(clippy::needless_range_loop)]
 
 use super::law::{alm_law, penalty, AlmLaw, Branch, Decision, Tangential};
+use super::vec3::{cross, dot, norm};
 
 type M3 = [[f64; 3]; 3];
 
@@ -61,19 +62,6 @@ pub fn on_face(n_nodes: usize, xi: [f64; 2], tol: f64) -> bool {
     }
 }
 
-fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
-fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-fn norm(a: [f64; 3]) -> f64 {
-    dot(a, a).sqrt()
-}
 fn skew(a: [f64; 3]) -> M3 {
     [[0.0, -a[2], a[1]], [a[2], 0.0, -a[0]], [-a[1], a[0], 0.0]]
 }

@@ -114,31 +114,7 @@ const AROUND: usize = 48;
 /// Latitude bands of the sphere's surface.
 const BANDS: usize = 24;
 
-// ---- small vector helpers (no allocation, no nalgebra conversions in the hot path) ----
-
-fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-
-fn scale(s: f64, a: [f64; 3]) -> [f64; 3] {
-    [s * a[0], s * a[1], s * a[2]]
-}
-
-fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-
-fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
-
-fn norm(a: [f64; 3]) -> f64 {
-    dot(a, a).sqrt()
-}
+use super::vec3::{cross, dot, norm, scale, sub};
 
 /// Unit vector along axis `i`.
 fn e(i: usize) -> [f64; 3] {

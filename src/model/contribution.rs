@@ -87,6 +87,16 @@ pub struct Reference<'a> {
     pub k_mean: f64,
 }
 
+impl Reference<'_> {
+    /// A contact's scales at local node n: its stiffness diagonal (the penalty's base)
+    /// and κ, the diagonal scaled from the P-wave modulus that dominates it down to
+    /// Young's modulus (see [`super::walls`]'s setup).
+    pub fn contact_scales(&self, n: usize) -> (f64, f64) {
+        let (d, f) = (self.k_diag[n], self.e_factor[n]);
+        (d.max(f64::MIN_POSITIVE), (f * d).max(f64::MIN_POSITIVE))
+    }
+}
+
 /// How a history column's per-rank values combine.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Reduce {

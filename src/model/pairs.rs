@@ -399,10 +399,10 @@ impl Contribution for Pairs {
     /// [`super::walls`]): κ scaled from the P-wave modulus down to Young's modulus.
     fn setup(&mut self, r: &Reference) {
         for (j, p) in self.def.pairs.iter().enumerate() {
-            let (d, f) = (r.k_diag[p.node], r.e_factor[p.node]);
-            self.k_node[j] = d.max(f64::MIN_POSITIVE);
+            let (k, kappa) = r.contact_scales(p.node);
+            self.k_node[j] = k;
             if self.def.kappa.is_none() {
-                self.kappa[j] = (f * d).max(f64::MIN_POSITIVE);
+                self.kappa[j] = kappa;
             }
         }
     }

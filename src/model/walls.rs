@@ -537,10 +537,10 @@ impl Contribution for Wall {
             b.set_kappa(r.k_mean.max(f64::MIN_POSITIVE));
         }
         for (j, &n) in self.def.nodes.iter().enumerate() {
-            let (d, f) = (r.k_diag[n], r.e_factor[n]);
-            self.k_node[j] = d.max(f64::MIN_POSITIVE);
+            let (k, kappa) = r.contact_scales(n);
+            self.k_node[j] = k;
             if self.def.kappa.is_none() {
-                self.kappa[j] = (f * d).max(f64::MIN_POSITIVE);
+                self.kappa[j] = kappa;
             }
         }
     }

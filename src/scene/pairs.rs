@@ -208,6 +208,47 @@ pub fn build_bolts(decks: &[BoltDeck], inp: &PairInputs) -> Result<Vec<PairsDef>
         .collect()
 }
 
+/// The mortar pair of a node whose node-to-face pair is `nts`, from its row of M
+/// (reference node → M_ta) and its D_t: the weights M_ta / Σ_a M_ta over every
+/// reference node its dual function overlaps, the frame still from its face at ξ. None
+/// for a node whose dual function is only partly covered (at the rim of the reference
+/// surface), which would get weights well outside [0, 1] (dual functions change sign):
+/// it keeps node-to-face weights.
+fn mortar_pair(nts: &Pair, row: Option<&BTreeMap<usize, f64>>, full: Option<f64>) -> Option<Pair> {
+    let row = row?;
+    let full = full?;
+    let covered: f64 = row.values().sum();
+    if !(full > 0.0 && (covered - full).abs() <= 1e-6 * full) {
+        return None;
+    }
+    let mut nodes: Vec<usize> = row.keys().copied().collect();
+    for &a in &nts.nodes {
+        if !nodes.contains(&a) {
+            nodes.push(a);
+        }
+    }
+    let w = nodes
+        .iter()
+        .map(|a| row.get(a).copied().unwrap_or(0.0) / covered)
+        .collect();
+    let dn = nodes
+        .iter()
+        .map(|a| {
+            nts.nodes
+                .iter()
+                .position(|b| b == a)
+                .map_or([0.0; 2], |i| nts.dn[i])
+        })
+        .collect();
+    Some(Pair {
+        node: nts.node,
+        nodes,
+        w,
+        dn,
+        area: covered,
+    })
+}
+
 /// Every `[[pairs]]` entry, paired.
 pub fn build_pairs(decks: &[PairsDeck], inp: &PairInputs) -> Result<Vec<PairsDef>> {
     decks
@@ -362,60 +403,17 @@ fn build_one(d: &PairsDeck, f: &str, inp: &PairInputs) -> Result<PairsDef> {
         match best {
             Some((_, k, xi)) => {
                 let (w, dn) = face_shape(face_nodes[k].len(), xi);
-                let Some((m, d_t)) = &mortar else {
-                    pairs.push(Pair {
-                        node: n,
-                        nodes: face_nodes[k].clone(),
-                        w,
-                        dn,
-                        area: areas.get(&n).copied().unwrap_or(0.0),
-                    });
-                    continue;
-                };
-                // Mortar: the weights M_ta / Σ_a M_ta over every reference node the
-                // node's dual function overlaps; the frame still from its face at ξ.
-                // A node whose dual function is only partly covered (at the rim of the
-                // reference surface) would get weights well outside [0, 1] (dual functions
-                // change sign): it keeps node-to-face weights.
-                let row = m.get(&n).cloned().unwrap_or_default();
-                let covered: f64 = row.values().sum();
-                let full = d_t.get(&n).copied().unwrap_or(0.0);
-                if !(full > 0.0 && (covered - full).abs() <= 1e-6 * full) {
-                    pairs.push(Pair {
-                        node: n,
-                        nodes: face_nodes[k].clone(),
-                        w,
-                        dn,
-                        area: areas.get(&n).copied().unwrap_or(0.0),
-                    });
-                    continue;
-                }
-                let mut nodes_all: Vec<usize> = row.keys().copied().collect();
-                for &a in &face_nodes[k] {
-                    if !nodes_all.contains(&a) {
-                        nodes_all.push(a);
-                    }
-                }
-                let wv = nodes_all
-                    .iter()
-                    .map(|a| row.get(a).copied().unwrap_or(0.0) / covered)
-                    .collect();
-                let dnv = nodes_all
-                    .iter()
-                    .map(|a| {
-                        face_nodes[k]
-                            .iter()
-                            .position(|b| b == a)
-                            .map_or([0.0; 2], |i| dn[i])
-                    })
-                    .collect();
-                pairs.push(Pair {
+                let nts = Pair {
                     node: n,
-                    nodes: nodes_all,
-                    w: wv,
-                    dn: dnv,
-                    area: covered,
-                });
+                    nodes: face_nodes[k].clone(),
+                    w,
+                    dn,
+                    area: areas.get(&n).copied().unwrap_or(0.0),
+                };
+                let mortar = mortar
+                    .as_ref()
+                    .and_then(|(m, d_t)| mortar_pair(&nts, m.get(&n), d_t.get(&n).copied()));
+                pairs.push(mortar.unwrap_or(nts));
             }
             None => unpaired += 1,
         }
