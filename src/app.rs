@@ -70,6 +70,11 @@ pub struct Summary {
     /// and displacement of each wall).
     #[serde(flatten)]
     pub contributions: BTreeMap<String, serde_json::Value>,
+    /// Analysis steps (the deck's `[[steps]]`), in order: name, end time and counts
+    /// (failed attempts included), wall time of their converged increments. Absent
+    /// without steps.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub analysis_steps: Vec<serde_json::Value>,
     pub wall_time_s: f64,
     /// Wall time by phase (max over ranks): setup, partition, assembly, linear_solve, output.
     pub phases: Phases,
@@ -300,6 +305,7 @@ pub fn run(comm: &dyn Comm, opts: &RunOptions) -> Result<RunOutcome> {
         &scene,
         settings.units.describe(),
         analysis.is_dynamic(),
+        !analysis.stages.is_empty(),
     )?;
     let nopts = &settings.solver;
     let every = settings.output.every;
@@ -463,6 +469,26 @@ pub fn run(comm: &dyn Comm, opts: &RunOptions) -> Result<RunOutcome> {
         factorizations: totals.factorizations,
         retries: totals.retries,
         contributions,
+        analysis_steps: analysis
+            .stages
+            .iter()
+            .enumerate()
+            .map(|(k, st)| {
+                let b = totals.by_stage.get(k).cloned().unwrap_or_default();
+                let mine = records.iter().filter(|r| r.stage == k && r.step > 0);
+                serde_json::json!({
+                    "name": st.name,
+                    "start_time": st.start,
+                    "end_time": st.end,
+                    "completed": records.last().is_some_and(|r| r.time >= st.end * (1.0 - 1e-9)),
+                    "increments": b.increments,
+                    "nonlinear_iterations": b.nonlinear_iterations,
+                    "linear_iterations": b.linear_iterations,
+                    "retries": b.retries,
+                    "wall_time_s": mine.map(|r| r.wall_seconds).sum::<f64>(),
+                })
+            })
+            .collect(),
         wall_time_s: t_start.elapsed().as_secs_f64(),
         phases: Phases {
             setup: ph[0],

@@ -268,3 +268,128 @@ fn bolt_pretension_then_locked_section() {
     let base = column(&out, "bottom.fz");
     assert!(rel_err(*base.last().unwrap(), -1300.0) < 1e-6, "{base:?}");
 }
+
+/// `tests/bolt-bar.toml` written as analysts write it: a `pretension` step (the bolt ramps
+/// over it and locks at its end) and a `service` step (the traction ramps over it, in
+/// quarter increments), with no curves. It gives the answers of the one-step deck with
+/// curves in the analysis' time at the shared times (the model is linear), lands on both
+/// steps' increments, numbers the rows by step and reports each step in summary.json.
+#[test]
+fn two_analysis_steps_are_the_one_step_deck() {
+    let one = run_deck("steps-one", include_str!("bolt-bar.toml"));
+    let staged = include_str!("bolt-bar.toml")
+        .replace(
+            "[[curves]]\nname = \"pre\"\npoints = [[0, 0], [1, 1], [2, 1]]\n",
+            "",
+        )
+        .replace(
+            "[[curves]]\nname = \"service\"\npoints = [[0, 0], [1, 0], [2, 1]]\n",
+            "",
+        );
+    let staged = edit(&staged, "curve = \"service\"", "step = \"service\"");
+    let staged = edit(
+        &staged,
+        "curve = \"pre\"\nlock_at = 1.0",
+        "step = \"pretension\"",
+    );
+    let staged = edit(&staged, "end_time = 2.0\n", "");
+    let staged = format!(
+        "{staged}\n[[steps]]\nname = \"pretension\"\nduration = 1.0\n\
+         [[steps]]\nname = \"service\"\nduration = 1.0\nstep = 0.25\n"
+    );
+    let two = run_deck("steps-two", &staged);
+    let t = column(&two, "time");
+    assert_eq!(t, vec![0.5, 1.0, 1.25, 1.5, 1.75, 2.0]);
+    assert_eq!(
+        column(&two, "analysis_step"),
+        vec![1.0, 1.0, 2.0, 2.0, 2.0, 2.0]
+    );
+    let t1 = column(&one, "time");
+    for name in ["bolt1.force", "bolt1.shortening", "bottom.fz", "top.fz"] {
+        let (a, b) = (column(&one, name), column(&two, name));
+        for (k, ti) in t1.iter().enumerate() {
+            let j = t.iter().position(|x| x == ti).unwrap();
+            assert!(
+                (a[k] - b[j]).abs() <= 1e-9 * a[k].abs().max(1.0),
+                "{name} at t = {ti}: {} vs {}",
+                a[k],
+                b[j]
+            );
+        }
+    }
+    let (ua, ub) = (&one.u, &two.u);
+    let scale = ua.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+    assert!(ua
+        .iter()
+        .zip(ub)
+        .all(|(a, b)| (a - b).abs() <= 1e-9 * scale));
+    let summary = serde_json::to_value(&two.summary).unwrap();
+    let steps = summary["analysis_steps"].as_array().unwrap();
+    assert_eq!(steps.len(), 2);
+    assert_eq!(steps[1]["name"], "service");
+    assert_eq!(steps[1]["end_time"], 2.0);
+    assert_eq!(steps[0]["increments"], 2);
+    assert_eq!(steps[1]["increments"], 4);
+    assert_eq!(steps[1]["completed"], true);
+    let its: u64 = steps
+        .iter()
+        .map(|s| s["nonlinear_iterations"].as_u64().unwrap())
+        .sum();
+    assert_eq!(Some(its), summary["nonlinear_iterations"].as_u64());
+}
+
+/// Step mistakes name their field.
+#[test]
+fn bad_step_decks_name_the_field() {
+    let bolt = include_str!("bolt-bar.toml");
+    let steps =
+        "\n[[steps]]\nname = \"a\"\nduration = 1.0\n[[steps]]\nname = \"b\"\nduration = 1.0\n";
+    let cases = [
+        (
+            format!(
+                "{}{steps}",
+                edit(
+                    bolt,
+                    "curve = \"service\"",
+                    "curve = \"service\"\nstep = \"c\""
+                )
+            ),
+            "loads[0].step: unknown step `c` (steps: a, b)",
+        ),
+        (
+            format!("{}{steps}", edit(bolt, "end_time = 2.0", "end_time = 3.0")),
+            "analysis.end_time: 3 differs from the steps' total duration 2",
+        ),
+        (
+            format!(
+                "{}{steps}\n[[curves]]\nname = \"one\"\npoints = [[0, 1]]\n",
+                edit(bolt, "curve = \"service\"", "curve = \"one\"\nstep = \"b\"")
+            ),
+            "loads[0].curve: the curve is 1 at the start of step `b`",
+        ),
+        (
+            format!(
+                "{}{}",
+                edit(bolt, "lock_at = 1.0", "lock_at = \"z\""),
+                steps
+            ),
+            "bolts[0].lock_at: unknown step `z`",
+        ),
+        (
+            format!(
+                "{bolt}{}",
+                steps.replace("duration = 1.0\n[[steps]]", "duration = -1.0\n[[steps]]")
+            ),
+            "steps[0].duration: expected a positive time",
+        ),
+        (
+            edit(bolt, "lock_at = 1.0", "step = \"a\""),
+            "bolts[0].step: unknown step `a` (the deck has no [[steps]])",
+        ),
+    ];
+    for (deck, want) in cases {
+        let e = try_run_deck("steps-bad", &deck).err().expect("refused");
+        let msg = e.to_string();
+        assert!(msg.contains(want), "expected `{want}` in: {msg}");
+    }
+}

@@ -37,6 +37,8 @@ pub struct ResultsWriter {
     grids: Vec<GridOut>,
     xgrids: Vec<XdmfGrid>,
     history: Option<std::fs::File>,
+    /// The run has analysis steps: history.csv has an `analysis_step` column.
+    staged: bool,
     /// Which of the contributions' history columns are integer counts.
     counts: Vec<bool>,
     n_nodes: u64,
@@ -123,10 +125,14 @@ pub(crate) fn history_header(
     reaction_sets: &[String],
     displacement_sets: &[String],
     dynamic: bool,
+    staged: bool,
     columns: &[String],
 ) -> String {
     let mut head =
         String::from("step,time,nonlinear_iterations,linear_iterations,retries,wall_time_s");
+    if staged {
+        head.push_str(",analysis_step");
+    }
     for s in reaction_sets {
         head.push_str(&format!(",{s}.fx,{s}.fy,{s}.fz"));
     }
@@ -148,12 +154,15 @@ pub(crate) fn history_header(
 
 /// One row of `history.csv` (the columns of [`history_header`]); `counts` says which of
 /// the contributions' columns are integer counts; `nan` where a record lacks them.
-pub(crate) fn history_row(rec: &StepRecord, counts: &[bool]) -> String {
+pub(crate) fn history_row(rec: &StepRecord, staged: bool, counts: &[bool]) -> String {
     let s = &rec.stats;
     let mut row = format!(
         "{},{},{},{},{},{:.6}",
         rec.step, rec.time, s.iterations, s.linear_iterations, rec.retries, rec.wall_seconds
     );
+    if staged {
+        row.push_str(&format!(",{}", rec.stage + 1));
+    }
     for f3 in &rec.reactions {
         row.push_str(&format!(",{:.12e},{:.12e},{:.12e}", f3[0], f3[1], f3[2]));
     }
@@ -194,6 +203,7 @@ impl ResultsWriter {
         scene: &str,
         units: &str,
         dynamic: bool,
+        staged: bool,
     ) -> Result<Self> {
         let t0 = std::time::Instant::now();
         let l = &model.mesh;
@@ -340,6 +350,7 @@ impl ResultsWriter {
                     &model.reaction_sets,
                     &model.displacement_sets,
                     dynamic,
+                    staged,
                     &columns,
                 );
                 writeln!(f, "{head}")?;
@@ -359,6 +370,7 @@ impl ResultsWriter {
             xgrids,
             history,
             counts: model.columns().iter().map(|c| c.count).collect(),
+            staged,
             n_nodes,
             n_elems,
             node_start,
@@ -398,7 +410,7 @@ impl ResultsWriter {
     ) -> Result<()> {
         let t0 = std::time::Instant::now();
         let r = if let Some(f) = self.history.as_mut() {
-            let row = history_row(rec, &self.counts);
+            let row = history_row(rec, self.staged, &self.counts);
             writeln!(f, "{row}")
                 .and_then(|_| f.flush())
                 .map_err(Error::from)
@@ -526,6 +538,7 @@ mod tests {
         StepRecord {
             step: 3,
             time: 0.75,
+            stage: 1,
             stats: SolveStats::default(),
             retries: 0,
             reactions: vec![[1.0, 2.0, 3.0]],
@@ -546,9 +559,9 @@ mod tests {
         let disp = vec!["a".to_string(), "b".to_string()];
         // Without contribution columns: none at all.
         for dynamic in [false, true] {
-            let h = history_header(&sets, &disp, dynamic, &[]);
+            let h = history_header(&sets, &disp, dynamic, dynamic, &[]);
             assert!(!h.contains("max_penetration"), "{h}");
-            let r = history_row(&record(dynamic, vec![]), &[]);
+            let r = history_row(&record(dynamic, vec![]), dynamic, &[]);
             assert_eq!(cols(&h).len(), cols(&r).len(), "{h}\n{r}");
         }
         // A wall's columns and the shared contact columns, last; counts as integers.
@@ -566,14 +579,14 @@ mod tests {
         let counts = [false, false, false, false, false, true];
         let values = vec![0.0, 0.0, -15.0, -7.5, 1e-3, 9.0];
         for dynamic in [false, true] {
-            let h = history_header(&sets, &disp, dynamic, &names);
+            let h = history_header(&sets, &disp, dynamic, false, &names);
             let hc = cols(&h);
             let n = hc.len();
             assert_eq!(
                 hc[n - 6..],
                 names.iter().map(|s| s.as_str()).collect::<Vec<_>>()[..]
             );
-            let r = history_row(&record(dynamic, values.clone()), &counts);
+            let r = history_row(&record(dynamic, values.clone()), false, &counts);
             let rc = cols(&r);
             assert_eq!(rc.len(), n, "{h}\n{r}");
             let at = |name: &str| rc[hc.iter().position(|c| *c == name).unwrap()];
@@ -582,7 +595,7 @@ mod tests {
             assert_eq!(at("contact_active"), "9");
             assert_eq!(at("top.fy").parse::<f64>().unwrap(), 2.0);
             // A record without its columns still fills every column.
-            let r = history_row(&record(dynamic, vec![]), &counts);
+            let r = history_row(&record(dynamic, vec![]), false, &counts);
             assert_eq!(cols(&r).len(), n, "{r}");
             assert!(r.ends_with(",nan,nan"), "{r}");
         }

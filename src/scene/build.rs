@@ -61,6 +61,7 @@ fn known(names: &BTreeMap<String, impl Sized>) -> String {
 /// Build and validate the model and its run settings. `deck_dir` resolves relative
 /// mesh file paths.
 pub fn build(deck: &Deck, deck_dir: &Path) -> Result<Scene> {
+    let deck = &super::steps::with_end_time(deck)?;
     if deck.scene.name.trim().is_empty() {
         return Err(err("scene.name", "expected a non-empty name"));
     }
@@ -268,17 +269,27 @@ pub fn build(deck: &Deck, deck_dir: &Path) -> Result<Scene> {
     if !(a.end_time > 0.0 && a.end_time.is_finite()) {
         return Err(err(
             "analysis.end_time",
-            format!("expected a positive time, got {}", a.end_time),
+            format!(
+                "expected a positive time (or [[steps]] whose durations add up to it), got {}",
+                a.end_time
+            ),
         ));
     }
     super::dynamics::check_analysis(deck)?;
+    let timeline = super::steps::Timeline::new(super::steps::stages(deck)?, &curves, a.end_time);
+    // Entries without a step (walls' motions): `field` is the curve field itself.
     let curve = |field: String, name: &Option<String>| -> Result<Curve> {
         match name {
             None => Ok(Curve::ramp(a.end_time)),
-            Some(n) => curves
-                .get(n)
-                .cloned()
-                .ok_or_else(|| err(field, format!("unknown curve `{n}` ({})", known(&curves)))),
+            Some(n) => {
+                let f = field.strip_suffix(".curve").unwrap_or(&field);
+                timeline.curve(f, name, &None).map_err(|_| {
+                    err(
+                        field.clone(),
+                        format!("unknown curve `{n}` ({})", known(&curves)),
+                    )
+                })
+            }
         }
     };
     // A boundary condition or nodal load may name a node set or a surface (its nodes).
@@ -316,6 +327,7 @@ pub fn build(deck: &Deck, deck_dir: &Path) -> Result<Scene> {
                 components,
                 value,
                 curve: c,
+                step,
                 ..
             } => {
                 if !value.is_finite() {
@@ -324,7 +336,7 @@ pub fn build(deck: &Deck, deck_dir: &Path) -> Result<Scene> {
                 (
                     components.clone(),
                     Motion::Uniform { value: [*value; 3] },
-                    curve(format!("{f}.curve"), c)?,
+                    timeline.curve(&f, c, step)?,
                 )
             }
             BoundaryDeck::Rotation {
@@ -332,6 +344,7 @@ pub fn build(deck: &Deck, deck_dir: &Path) -> Result<Scene> {
                 center,
                 angle,
                 curve: c,
+                step,
                 ..
             } => {
                 let n = (axis[0] * axis[0] + axis[1] * axis[1] + axis[2] * axis[2]).sqrt();
@@ -348,7 +361,7 @@ pub fn build(deck: &Deck, deck_dir: &Path) -> Result<Scene> {
                         center: *center,
                         angle: *angle,
                     },
-                    curve(format!("{f}.curve"), c)?,
+                    timeline.curve(&f, c, step)?,
                 )
             }
         };
@@ -396,6 +409,7 @@ pub fn build(deck: &Deck, deck_dir: &Path) -> Result<Scene> {
                 set,
                 force,
                 curve: c,
+                step,
             } => {
                 finite3(force, "force")?;
                 let nodes = set_nodes(format!("{f}.set"), set)?;
@@ -403,26 +417,28 @@ pub fn build(deck: &Deck, deck_dir: &Path) -> Result<Scene> {
                 LoadDef::Nodal {
                     set: set.clone(),
                     force: *force,
-                    curve: curve(format!("{f}.curve"), c)?,
+                    curve: timeline.curve(&f, c, step)?,
                 }
             }
             LoadDeck::Traction {
                 surface: s,
                 traction,
                 curve: c,
+                step,
             } => {
                 finite3(traction, "traction")?;
                 surface(s)?;
                 LoadDef::Traction {
                     surface: s.clone(),
                     traction: *traction,
-                    curve: curve(format!("{f}.curve"), c)?,
+                    curve: timeline.curve(&f, c, step)?,
                 }
             }
             LoadDeck::Pressure {
                 surface: s,
                 pressure,
                 curve: c,
+                step,
             } => {
                 if !pressure.is_finite() {
                     return Err(err(format!("{f}.pressure"), "expected a finite number"));
@@ -431,7 +447,7 @@ pub fn build(deck: &Deck, deck_dir: &Path) -> Result<Scene> {
                 LoadDef::Pressure {
                     surface: s.clone(),
                     pressure: *pressure,
-                    curve: curve(format!("{f}.curve"), c)?,
+                    curve: timeline.curve(&f, c, step)?,
                 }
             }
         });
@@ -566,7 +582,7 @@ pub fn build(deck: &Deck, deck_dir: &Path) -> Result<Scene> {
             node_sets: &node_sets,
             surfaces: &surfaces,
             set_nodes: &set_nodes,
-            curve: &curve,
+            timeline: &timeline,
             analysis: deck.analysis.kind,
         },
     )?;
@@ -574,7 +590,7 @@ pub fn build(deck: &Deck, deck_dir: &Path) -> Result<Scene> {
         mesh: &mesh,
         surfaces: &surfaces,
         set_nodes: &set_nodes,
-        curve: &curve,
+        timeline: &timeline,
         end_time: deck.analysis.end_time,
         analysis: deck.analysis.kind,
     };
@@ -663,7 +679,7 @@ pub fn build(deck: &Deck, deck_dir: &Path) -> Result<Scene> {
     };
     Ok(Scene {
         model,
-        run: run_settings(deck),
+        run: run_settings(deck, &timeline),
     })
 }
 
@@ -710,9 +726,9 @@ pub fn amg_unsuited(deck: &Deck) -> Option<String> {
     None
 }
 
-/// The times where a load curve or a wall motion's segment changes slope, inside the
-/// run (`Analysis::stops`).
-fn curve_breakpoints(deck: &Deck) -> Vec<f64> {
+/// The times where a resolved load curve or a wall motion's segment changes slope, and
+/// where an analysis step ends or a bolt locks, inside the run (`Analysis::stops`).
+fn curve_breakpoints(deck: &Deck, timeline: &super::steps::Timeline) -> Vec<f64> {
     let end = deck.analysis.end_time;
     let segments = deck
         .walls
@@ -721,12 +737,10 @@ fn curve_breakpoints(deck: &Deck) -> Vec<f64> {
         .filter_map(|w| w.motion.as_ref()?.segments.as_ref())
         .flatten()
         .map(|s| s.to);
-    let mut t: Vec<f64> = deck
-        .curves
-        .iter()
-        .flat_map(|c| c.points.iter().map(|p| p[0]))
+    let mut t: Vec<f64> = timeline
+        .stops()
+        .into_iter()
         .chain(segments)
-        .chain(deck.bolts.iter().map(|b| b.lock_at))
         .filter(|&t| t > 0.0 && t < end && t.is_finite())
         .collect();
     t.sort_by(f64::total_cmp);
@@ -734,7 +748,7 @@ fn curve_breakpoints(deck: &Deck) -> Vec<f64> {
     t
 }
 
-fn run_settings(deck: &Deck) -> RunSettings {
+fn run_settings(deck: &Deck, timeline: &super::steps::Timeline) -> RunSettings {
     let a = &deck.analysis;
     let s = &deck.solver;
     RunSettings {
@@ -754,10 +768,16 @@ fn run_settings(deck: &Deck) -> RunSettings {
                 .unwrap_or(crate::solve::time::explicit::DEFAULT_DT_FACTOR),
             predictor: a.predictor.unwrap_or_default(),
             stops: if a.kind == AnalysisKind::Static {
-                curve_breakpoints(deck)
+                curve_breakpoints(deck, timeline)
             } else {
-                Vec::new()
+                timeline
+                    .stages
+                    .iter()
+                    .map(|s| s.end)
+                    .filter(|&t| t < a.end_time)
+                    .collect()
             },
+            stages: timeline.stages.clone(),
         },
         solver: NonlinearOptions {
             kind: s.nonlinear,

@@ -63,11 +63,13 @@ impl Components {
     }
 }
 
-/// A number, or `{ value, curve }` (the curve's name).
+/// A number, or `{ value, curve, step }` (the curve's name; the analysis step whose time
+/// it runs in).
 #[derive(Debug, Clone, Serialize)]
 pub struct Amount {
     pub value: f64,
     pub curve: Option<String>,
+    pub step: Option<String>,
 }
 
 impl<'de> Deserialize<'de> for Amount {
@@ -76,12 +78,13 @@ impl<'de> Deserialize<'de> for Amount {
         impl<'de> Visitor<'de> for V {
             type Value = Amount;
             fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
-                f.write_str("a number or a table { value, curve }")
+                f.write_str("a number or a table { value, curve, step }")
             }
             fn visit_f64<E: de::Error>(self, v: f64) -> std::result::Result<Amount, E> {
                 Ok(Amount {
                     value: v,
                     curve: None,
+                    step: None,
                 })
             }
             fn visit_i64<E: de::Error>(self, v: i64) -> std::result::Result<Amount, E> {
@@ -94,16 +97,22 @@ impl<'de> Deserialize<'de> for Amount {
                 self,
                 mut m: M,
             ) -> std::result::Result<Amount, M::Error> {
-                let (mut value, mut curve) = (None, None);
+                let (mut value, mut curve, mut step) = (None, None, None);
                 while let Some(k) = m.next_key::<String>()? {
                     match k.as_str() {
                         "value" => value = Some(m.next_value::<f64>()?),
                         "curve" => curve = Some(m.next_value::<String>()?),
-                        other => return Err(de::Error::unknown_field(other, &["value", "curve"])),
+                        "step" => step = Some(m.next_value::<String>()?),
+                        other => {
+                            return Err(de::Error::unknown_field(
+                                other,
+                                &["value", "curve", "step"],
+                            ))
+                        }
                     }
                 }
                 let value = value.ok_or_else(|| de::Error::missing_field("value"))?;
-                Ok(Amount { value, curve })
+                Ok(Amount { value, curve, step })
             }
         }
         d.deserialize_any(V)
@@ -120,7 +129,7 @@ pub struct CouplingInputs<'a> {
     pub node_sets: &'a BTreeMap<String, Vec<usize>>,
     pub surfaces: &'a BTreeMap<String, Vec<FaceRef>>,
     pub set_nodes: &'a dyn Fn(String, &str) -> Result<Vec<usize>>,
-    pub curve: &'a dyn Fn(String, &Option<String>) -> Result<Curve>,
+    pub timeline: &'a super::steps::Timeline<'a>,
     pub analysis: AnalysisKind,
 }
 
@@ -186,7 +195,7 @@ fn build_coupling(c: &CouplingDeck, f: &str, inp: &CouplingInputs) -> Result<Cou
         if !a.value.is_finite() {
             return Err(err(&field, "expected a finite number"));
         }
-        Ok((a.value, (inp.curve)(format!("{field}.curve"), &a.curve)?))
+        Ok((a.value, inp.timeline.curve(&field, &a.curve, &a.step)?))
     };
     let mut dofs: [Dof; 6] = std::array::from_fn(|_| Dof::Free { load: None });
     for (k, axis) in ["x", "y", "z"].into_iter().enumerate() {

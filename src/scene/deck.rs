@@ -25,6 +25,10 @@ pub struct Deck {
     #[serde(default)]
     pub loads: Vec<LoadDeck>,
     pub analysis: AnalysisDeck,
+    /// Analysis steps in sequence (Abaqus `*STEP`): loads, motions and bolts may name
+    /// one (see `scene::steps`).
+    #[serde(default)]
+    pub steps: Vec<super::steps::StepDeck>,
     #[serde(default)]
     pub solver: SolverDeck,
     #[serde(default)]
@@ -390,9 +394,12 @@ pub enum BoundaryDeck {
         set: String,
         components: Vec<Comp>,
         value: f64,
-        /// Default: a ramp from 0 at t = 0 to 1 at the end time.
+        /// Default: a ramp from 0 at t = 0 to 1 at the end time (or over `step`).
         #[serde(default)]
         curve: Option<String>,
+        /// An analysis step: the curve runs in its time (the set is held at 0 before it).
+        #[serde(default)]
+        step: Option<String>,
     },
     /// Rigid rotation of the set by `angle × curve(t)` (radians, right-hand rule) about
     /// the line through `center` along `axis`; all three components are prescribed.
@@ -404,6 +411,8 @@ pub enum BoundaryDeck {
         angle: f64,
         #[serde(default)]
         curve: Option<String>,
+        #[serde(default)]
+        step: Option<String>,
     },
 }
 
@@ -430,6 +439,9 @@ pub enum LoadDeck {
         force: [f64; 3],
         #[serde(default)]
         curve: Option<String>,
+        /// An analysis step: the curve runs in its time (absent before, held after).
+        #[serde(default)]
+        step: Option<String>,
     },
     /// A dead traction (force per reference area) on a surface.
     Traction {
@@ -437,6 +449,8 @@ pub enum LoadDeck {
         traction: [f64; 3],
         #[serde(default)]
         curve: Option<String>,
+        #[serde(default)]
+        step: Option<String>,
     },
     /// A follower pressure (positive pushes into the body) on a surface.
     Pressure {
@@ -444,6 +458,8 @@ pub enum LoadDeck {
         pressure: f64,
         #[serde(default)]
         curve: Option<String>,
+        #[serde(default)]
+        step: Option<String>,
     },
 }
 
@@ -452,7 +468,9 @@ pub enum LoadDeck {
 pub struct AnalysisDeck {
     #[serde(rename = "type")]
     pub kind: AnalysisKind,
-    /// Pseudo-time at the end of the load path.
+    /// Pseudo-time at the end of the load path; with `[[steps]]` their total duration
+    /// (which may be left out).
+    #[serde(default)]
     pub end_time: f64,
     /// Static: pseudo-time step; implicit: the time step Δt (the first, and the largest
     /// unless `max_step` says); explicit: an optional fixed Δt (0 = not given: the stable
@@ -716,9 +734,9 @@ step = 0.5
 
     #[test]
     fn missing_field_is_reported() {
-        let bad = MIN.replace("end_time = 1.0\n", "");
+        let bad = MIN.replace("type = \"static\"\n", "");
         let e = parse(&bad).unwrap_err();
-        assert!(e.contains("analysis") && e.contains("end_time"), "{e}");
+        assert!(e.contains("analysis") && e.contains("type"), "{e}");
     }
 
     #[test]

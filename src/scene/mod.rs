@@ -8,6 +8,7 @@ pub mod coupling;
 pub mod deck;
 mod dynamics;
 pub mod pairs;
+pub mod steps;
 pub mod walls;
 
 use crate::model::def::ModelDef;

@@ -130,16 +130,30 @@ pub struct BoltDeck {
     /// toward `reference`).
     pub tracked: String,
     pub reference: String,
-    /// The pretension (a force), times `curve` (default: a ramp over the analysis).
+    /// The pretension (a force), times `curve` (default: a ramp up to the lock).
     pub force: f64,
     #[serde(default)]
     pub curve: Option<String>,
-    /// From this time on the section keeps the length it has then.
-    pub lock_at: f64,
+    /// The analysis step of the pretension: the curve runs in its time (default a ramp
+    /// over it) and the section locks at its end unless `lock_at` says otherwise.
+    #[serde(default)]
+    pub step: Option<String>,
+    /// From this time (a number, or a step's name: its end) on the section keeps the
+    /// length it has then. Required without `step`.
+    #[serde(default)]
+    pub lock_at: Option<LockAt>,
     #[serde(default)]
     pub kappa: Option<f64>,
     #[serde(default)]
     pub search_distance: Option<f64>,
+}
+
+/// When a bolt locks: a time, or the end of a named analysis step.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(untagged)]
+pub enum LockAt {
+    Time(f64),
+    Step(String),
 }
 
 /// What building pairs needs from the rest of the deck.
@@ -147,7 +161,7 @@ pub struct PairInputs<'a> {
     pub mesh: &'a Mesh,
     pub surfaces: &'a BTreeMap<String, Vec<FaceRef>>,
     pub set_nodes: &'a dyn Fn(String, &str) -> Result<Vec<usize>>,
-    pub curve: &'a dyn Fn(String, &Option<String>) -> Result<crate::curve::Curve>,
+    pub timeline: &'a super::steps::Timeline<'a>,
     pub end_time: f64,
     pub analysis: crate::solve::AnalysisKind,
 }
@@ -168,19 +182,34 @@ pub fn build_bolts(decks: &[BoltDeck], inp: &PairInputs) -> Result<Vec<PairsDef>
             if !b.force.is_finite() {
                 return Err(err(format!("{f}.force"), "expected a finite force"));
             }
-            if !(b.lock_at > 0.0 && b.lock_at <= inp.end_time) {
+            let lock_at = match (&b.lock_at, &b.step) {
+                (Some(LockAt::Time(t)), _) => *t,
+                (Some(LockAt::Step(s)), _) => inp
+                    .timeline
+                    .end_of(&f, s)
+                    .map_err(|_| err(format!("{f}.lock_at"), format!("unknown step `{s}`")))?,
+                (None, Some(s)) => inp.timeline.end_of(&f, s)?,
+                (None, None) => {
+                    return Err(err(
+                        format!("{f}.lock_at"),
+                        "expected a time or a step's name (or give the bolt a `step`: it locks at its end)",
+                    ))
+                }
+            };
+            if !(lock_at > 0.0 && lock_at <= inp.end_time) {
                 return Err(err(
                     format!("{f}.lock_at"),
                     format!(
                         "expected a time in (0, {}] (the analysis' end), got {}",
-                        inp.end_time, b.lock_at
+                        inp.end_time, lock_at
                     ),
                 ));
             }
-            // Without a curve the pretension ramps up to `lock_at` and holds.
-            let curve = match &b.curve {
-                None => crate::curve::Curve::ramp(b.lock_at),
-                Some(_) => (inp.curve)(format!("{f}.curve"), &b.curve)?,
+            inp.timeline.mark(lock_at);
+            // Without a curve the pretension ramps up to the lock (over its step) and holds.
+            let curve = match (&b.curve, &b.step) {
+                (None, None) => crate::curve::Curve::ramp(lock_at),
+                _ => inp.timeline.curve(&f, &b.curve, &b.step)?,
             };
             let pairs = PairsDeck {
                 name: b.name.clone(),
@@ -200,7 +229,7 @@ pub fn build_bolts(decks: &[BoltDeck], inp: &PairInputs) -> Result<Vec<PairsDef>
             def.pretension = Some(Pretension {
                 force: b.force,
                 curve,
-                lock_at: b.lock_at,
+                lock_at,
                 owner: 0,
             });
             Ok(def)

@@ -89,10 +89,40 @@ pub struct Analysis {
     /// reversal of the loading is reached exactly and not stepped over.
     #[serde(default)]
     pub stops: Vec<f64>,
+    /// The analyst's steps (the deck's `[[steps]]`, Abaqus `*STEP`), in order: empty for
+    /// a run that is one step. Their ends are among the stops.
+    #[serde(default)]
+    pub stages: Vec<Stage>,
+}
+
+/// One analysis step (a `[[steps]]` entry): a named interval of the (pseudo-)time line
+/// with its own increment sizes. Loads and prescribed motions that name it follow their
+/// curves in its step time and hold their final value after it.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Stage {
+    pub name: String,
+    /// Start and end on the analysis' time line.
+    pub start: f64,
+    pub end: f64,
+    /// The first increment, the smallest a failing one may be cut to, the largest after
+    /// growth.
+    pub step: f64,
+    pub min_step: f64,
+    pub max_step: f64,
 }
 
 impl Analysis {
     pub fn is_dynamic(&self) -> bool {
         self.kind != AnalysisKind::Static
+    }
+
+    /// The index of the stage an increment ending at `t` belongs to (the first whose end
+    /// is not before `t`); 0 without stages.
+    pub fn stage_at(&self, t: f64) -> usize {
+        let eps = 1e-9 * self.end_time.abs().max(1.0);
+        self.stages
+            .iter()
+            .position(|s| t <= s.end + eps)
+            .unwrap_or(self.stages.len().saturating_sub(1))
     }
 }

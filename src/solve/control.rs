@@ -3,9 +3,10 @@
 //! converge is retried from the last converged state with half the step (a counted
 //! retry; the caller refreshes its preconditioner); after a step that converged in at
 //! most `easy_iterations` without retries the step grows by `growth` up to `max_step`.
-//! Below `min_step` the run ends, keeping everything converged so far.
+//! Below `min_step` the run ends, keeping everything converged so far. With analysis
+//! steps (`Analysis::stages`) each step starts from its own increment and bounds.
 
-use super::Analysis;
+use super::{Analysis, Stage};
 
 #[derive(Debug, Clone)]
 pub struct StepControl {
@@ -24,6 +25,9 @@ pub struct StepControl {
     steps: usize,
     /// Failed attempts of the step being tried.
     retries: usize,
+    stages: Vec<Stage>,
+    /// The stage the next increment belongs to.
+    stage: usize,
 }
 
 impl StepControl {
@@ -41,7 +45,37 @@ impl StepControl {
             dt: a.step.min(a.max_step),
             steps: 0,
             retries: 0,
+            stages: a.stages.clone(),
+            stage: 0,
         }
+        .entering(0)
+    }
+
+    /// Take the increment bounds of stage `k` (if there are stages).
+    fn entering(mut self, k: usize) -> Self {
+        self.enter(k);
+        self
+    }
+
+    fn enter(&mut self, k: usize) {
+        self.stage = k;
+        if let Some(s) = self.stages.get(k) {
+            self.min_step = s.min_step;
+            self.max_step = s.max_step;
+            self.dt = s.step.min(s.max_step);
+        }
+    }
+
+    /// The stage the next increment belongs to (0 without stages).
+    pub fn stage(&self) -> usize {
+        self.stage
+    }
+
+    /// True before the first increment of a stage after the first: what was learnt from
+    /// the last increments (a predictor's extrapolation) belongs to another load path.
+    pub fn at_stage_start(&self) -> bool {
+        self.stage > 0
+            && (self.t_done - self.stages[self.stage].start).abs() <= 1e-9 * self.end.abs().max(1.0)
     }
 
     /// The next attempt `(t_n, t_{n+1})`, or `None` once the end time is reached.
@@ -91,6 +125,10 @@ impl StepControl {
         }
         self.t_done = t1;
         self.retries = 0;
+        let eps = 1e-9 * self.end.abs().max(1.0);
+        if self.stage + 1 < self.stages.len() && t1 >= self.stages[self.stage].end - eps {
+            self.enter(self.stage + 1);
+        }
         (self.steps, retries)
     }
 }
@@ -121,6 +159,7 @@ mod tests {
             dt_factor: 0.9,
             predictor: crate::solve::Predictor::Linear,
             stops: Vec::new(),
+            stages: Vec::new(),
         }
     }
 
@@ -200,5 +239,40 @@ mod tests {
         a.stops = vec![0.5];
         let c = StepControl::new(&a, 20);
         assert_eq!(c.next().unwrap().1, 0.5);
+    }
+
+    /// Each stage starts from its own increment and keeps to its bounds; its end is a
+    /// stop (the scene adds it); `at_stage_start` holds before a later stage's first
+    /// increment only.
+    #[test]
+    fn stages_have_their_own_increments() {
+        let mut a = analysis(0.5, 0.01, 0.5);
+        let stage = |name: &str, start: f64, end: f64, step: f64| Stage {
+            name: name.into(),
+            start,
+            end,
+            step,
+            min_step: step / 100.0,
+            max_step: step,
+        };
+        a.stages = vec![stage("a", 0.0, 0.5, 0.5), stage("b", 0.5, 1.0, 0.1)];
+        a.stops = vec![0.5];
+        let mut c = StepControl::new(&a, 20);
+        let mut times = Vec::new();
+        let mut starts = Vec::new();
+        while let Some((_, t1)) = c.next() {
+            starts.push(c.at_stage_start());
+            times.push((c.stage(), t1));
+            c.accept(t1, 2);
+        }
+        let want = [0.5, 0.6, 0.7, 0.8, 0.9, 1.0];
+        assert_eq!(times.len(), want.len(), "{times:?}");
+        for ((k, t), w) in times.iter().zip(want) {
+            assert!((t - w).abs() < 1e-12, "{times:?}");
+            assert_eq!(*k, usize::from(w > 0.5));
+        }
+        assert_eq!(starts, vec![false, true, false, false, false, false]);
+        assert_eq!(a.stage_at(0.5), 0);
+        assert_eq!(a.stage_at(0.55), 1);
     }
 }

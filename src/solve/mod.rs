@@ -8,4 +8,4 @@ pub mod nonlinear;
 pub mod stepping;
 pub mod time;
 
-pub use analysis::{Analysis, AnalysisKind, MassKind, Predictor, Scheme};
+pub use analysis::{Analysis, AnalysisKind, MassKind, Predictor, Scheme, Stage};

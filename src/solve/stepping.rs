@@ -37,6 +37,8 @@ impl NonlinearProblem for StaticProblem<'_> {
 pub struct StepRecord {
     pub step: usize,
     pub time: f64,
+    /// The analysis step (`Analysis::stages`) it belongs to, 0-based (0 without stages).
+    pub stage: usize,
     pub stats: SolveStats,
     pub retries: usize,
     /// Reaction force of each reaction set (model order).
@@ -64,9 +66,38 @@ pub struct RunTotals {
     pub seconds_linear: f64,
     /// Why the run stopped early, if it did.
     pub failure: Option<String>,
+    /// Counts by analysis step (`Analysis::stages`; one entry without stages), failed
+    /// attempts included.
+    pub by_stage: Vec<StageTotals>,
+}
+
+/// One analysis step's share of [`RunTotals`].
+#[derive(Debug, Clone, Default, serde::Serialize)]
+pub struct StageTotals {
+    pub increments: usize,
+    pub nonlinear_iterations: usize,
+    pub linear_iterations: usize,
+    pub retries: usize,
 }
 
 impl RunTotals {
+    /// [`RunTotals::add`], also counted for analysis step `stage`; `converged` counts an
+    /// increment, otherwise a retry.
+    pub fn add_in(&mut self, stage: usize, s: &SolveStats) {
+        self.add(s);
+        if self.by_stage.len() <= stage {
+            self.by_stage.resize(stage + 1, StageTotals::default());
+        }
+        let b = &mut self.by_stage[stage];
+        b.nonlinear_iterations += s.iterations;
+        b.linear_iterations += s.linear_iterations;
+        if s.converged {
+            b.increments += 1;
+        } else {
+            b.retries += 1;
+        }
+    }
+
     /// Add one nonlinear solve's counts and times.
     pub fn add(&mut self, s: &SolveStats) {
         self.nonlinear_iterations += s.iterations;
@@ -109,6 +140,11 @@ pub fn run_static(
         let mut trial = u.clone();
         // After a failed attempt the cut step starts from the converged state: the
         // extrapolation may be what failed.
+        // A new analysis step starts a new load path: no extrapolation into it.
+        if ctl.at_stage_start() {
+            last = None;
+        }
+        let stage = ctl.stage();
         if let (Predictor::Linear, Some((du, dt)), false) = (analysis.predictor, &last, failed) {
             let s = (t - t_n) / dt;
             for (x, d) in trial.iter_mut().zip(du) {
@@ -121,7 +157,7 @@ pub fn run_static(
                 comm, &mut prob, &mut trial, &mut r, &g, &mut k, &mut pc, opts,
             )?
         };
-        tot.add(&stats);
+        tot.add_in(stage, &stats);
         if !stats.converged {
             if std::env::var("ALFE_DEBUG").is_ok() {
                 eprintln!(
@@ -148,6 +184,7 @@ pub fn run_static(
         let rec = StepRecord {
             step,
             time: t,
+            stage,
             reactions: model.reactions(comm, &r),
             stats,
             retries,

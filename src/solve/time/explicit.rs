@@ -112,6 +112,7 @@ pub fn run_explicit(
         &StepRecord {
             step: 0,
             time: 0.0,
+            stage: 0,
             stats: stats(1),
             retries: 0,
             reactions: model.reactions(comm, &react),
@@ -198,6 +199,7 @@ pub fn run_explicit(
         let rec = StepRecord {
             step,
             time: t1,
+            stage: analysis.stage_at(t1),
             stats: stats(1),
             retries: 0,
             reactions: model.reactions(comm, &react),

@@ -209,6 +209,7 @@ pub fn run_implicit(
         &StepRecord {
             step: 0,
             time: 0.0,
+            stage: 0,
             stats: st0,
             retries: 0,
             reactions: model.reactions(comm, &react),
@@ -224,6 +225,7 @@ pub fn run_implicit(
     let mut trial = vec![0.0; n];
     let mut t0 = Instant::now();
     while let Some((t_done, t1)) = ctl.next() {
+        let stage = ctl.stage();
         let h = t1 - t_done;
         let g1 = model.prescribed(t1);
         for i in 0..n {
@@ -251,7 +253,7 @@ pub fn run_implicit(
                 comm, &mut prob, &mut trial, &mut r, &g1, &mut k, &mut pc, opts,
             )?
         };
-        tot.add(&stats);
+        tot.add_in(stage, &stats);
         if !stats.converged {
             pc.invalidate();
             if let Err(why) = ctl.reject(t1, &stats.reason, "time step") {
@@ -296,6 +298,7 @@ pub fn run_implicit(
         let rec = StepRecord {
             step,
             time: t1,
+            stage,
             reactions: model.reactions(comm, &react),
             stats,
             retries,
