@@ -616,6 +616,20 @@ fn describe(def: &ModelDef, run: &RunSettings) -> String {
 
 /// Steps at the deck's step size ("from the mesh" for explicit runs without one).
 fn nominal_steps(a: &Analysis) -> String {
+    if !a.stages.is_empty() {
+        let each: Vec<usize> = a
+            .stages
+            .iter()
+            .map(|s| crate::solve::control::step_times(s.end - s.start, s.step).len())
+            .collect();
+        let names: Vec<String> = a
+            .stages
+            .iter()
+            .zip(&each)
+            .map(|(s, n)| format!("{} {n}", s.name))
+            .collect();
+        return format!("{} ({})", each.iter().sum::<usize>(), names.join(", "));
+    }
     if a.step > 0.0 {
         crate::solve::control::step_times(a.end_time, a.step)
             .len()

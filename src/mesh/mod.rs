@@ -3,6 +3,7 @@
 //! A [`Mesh`] is the serial, whole-model mesh that rank 0 builds or reads before it
 //! partitions; ranks receive their pieces through `partition::distribute`.
 
+pub mod blocks;
 pub mod cylinder;
 pub mod generate;
 pub mod gmsh;

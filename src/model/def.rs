@@ -145,6 +145,8 @@ pub struct ModelDef {
     pub reaction_sets: Vec<String>,
     /// Node sets whose mean displacement is reported, in column order.
     pub displacement_sets: Vec<String>,
+    /// Parts whose largest element von Mises stress is reported: (name, part index).
+    pub peak_stress_parts: Vec<(String, u32)>,
     /// Initial velocities of dynamic runs: (node set, velocity), later entries win.
     /// A `part` in the deck is a node set named `part:<name>`.
     pub initial_velocity: Vec<(String, [f64; 3])>,

@@ -23,6 +23,9 @@ pub struct LocalModel {
     pub constraints: Vec<Constraint>,
     pub reaction_sets: Vec<String>,
     pub displacement_sets: Vec<String>,
+    /// Parts whose largest von Mises stress is a history column: (name, part index).
+    #[serde(default)]
+    pub peak_stress_parts: Vec<(String, u32)>,
     pub initial_velocity: Vec<(String, [f64; 3])>,
     /// Every contribution definition, localized to this rank (the same list, in the same
     /// order, on every rank).
@@ -108,6 +111,7 @@ pub fn split(def: &ModelDef, part: &[u32], ranks: usize) -> Vec<LocalModel> {
             elements.material.push(def.elem_material(e) as u32);
             elements.formulation.push(def.elem_formulation(e));
             elements.orig.push(e as u64);
+            elements.part.push(mesh.elem_part[e]);
             local_elem.insert(e, le);
         }
         let node_sets = def
@@ -161,6 +165,7 @@ pub fn split(def: &ModelDef, part: &[u32], ranks: usize) -> Vec<LocalModel> {
             constraints: def.constraints.clone(),
             reaction_sets: def.reaction_sets.clone(),
             displacement_sets: def.displacement_sets.clone(),
+            peak_stress_parts: def.peak_stress_parts.clone(),
             initial_velocity: def.initial_velocity.clone(),
             contributions,
         });

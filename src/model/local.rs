@@ -72,6 +72,9 @@ pub struct LocalElements {
     pub formulation: Vec<Formulation>,
     /// Element number in the user's mesh.
     pub orig: Vec<u64>,
+    /// Part index (deck order) of each element.
+    #[serde(default)]
+    pub part: Vec<u32>,
 }
 
 impl LocalElements {

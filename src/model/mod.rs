@@ -93,9 +93,11 @@ impl Model {
             reaction_sets,
             displacement_sets,
             initial_velocity,
+            peak_stress_parts,
             ..
         } = local;
-        let solids = Solids::new(elements, &materials);
+        let mut solids = Solids::new(elements, &materials);
+        solids.peak_stress_parts = peak_stress_parts;
         let mut unknowns = vec![solids.unknowns()];
         unknowns.extend(contributions.iter().map(|c| c.unknowns()));
         let dofs = DofMap::new(comm, &mesh.owned_nodes_per_rank, &mesh.ghosts, &unknowns);

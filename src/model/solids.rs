@@ -3,7 +3,9 @@
 //! element fields (stress, von Mises, plastic strain). The model also reaches it by type
 //! for what only elements have: mass, the explicit stable step, the mesh for output.
 
-use super::contribution::{Center, Combine, Contribution, Evaluation, FieldSpec, State};
+use super::contribution::{
+    Center, Column, Combine, Contribution, Evaluation, FieldSpec, Reduce, State,
+};
 use super::def::MaterialDef;
 use super::distribute::LocalElements;
 use crate::fem::element::{element_force, element_stress, n_gauss, von_mises};
@@ -21,6 +23,8 @@ pub struct Solids {
     pub(crate) state_new: Vec<f64>,
     /// Element evaluations so far (for rates).
     pub evaluations: u64,
+    /// Parts whose largest element von Mises stress is a column `<part>.max_von_mises`.
+    pub peak_stress_parts: Vec<(String, u32)>,
 }
 
 impl Solids {
@@ -42,6 +46,7 @@ impl Solids {
             state_old: vec![0.0; s],
             state_new: vec![0.0; s],
             evaluations: 0,
+            peak_stress_parts: Vec::new(),
         }
     }
 
@@ -215,6 +220,34 @@ impl Contribution for Solids {
 
     fn commit(&mut self) {
         self.state_old.copy_from_slice(&self.state_new);
+    }
+
+    fn columns(&self) -> Vec<Column> {
+        self.peak_stress_parts
+            .iter()
+            .map(|(name, _)| Column {
+                reduce: Reduce::Max,
+                run_max: true,
+                ..Column::sum(format!("{name}.max_von_mises"))
+            })
+            .collect()
+    }
+
+    /// The largest element von Mises stress (the element's mean over its Gauss points,
+    /// as in the `von_mises` field) of each listed part.
+    fn column_values(&self, s: &State, out: &mut [f64]) {
+        if self.peak_stress_parts.is_empty() {
+            return;
+        }
+        let sig = self.stresses(s.coords, s.u);
+        for (o, (_, p)) in out.iter_mut().zip(&self.peak_stress_parts) {
+            *o = sig
+                .iter()
+                .zip(&self.elements.part)
+                .filter(|(_, q)| *q == p)
+                .map(|(v, _)| von_mises(v))
+                .fold(0.0, f64::max);
+        }
     }
 
     fn fields(&self) -> Vec<FieldSpec> {

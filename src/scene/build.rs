@@ -662,6 +662,28 @@ pub fn build(deck: &Deck, deck_dir: &Path) -> Result<Scene> {
             }
         },
     };
+    let peak_stress_parts = deck
+        .output
+        .peak_stress
+        .iter()
+        .enumerate()
+        .map(
+            |(i, name)| match deck.parts.iter().position(|p| &p.name == name) {
+                Some(k) => Ok((name.clone(), k as u32)),
+                None => Err(err(
+                    format!("output.peak_stress[{i}]"),
+                    format!(
+                        "unknown part `{name}` (parts: {})",
+                        deck.parts
+                            .iter()
+                            .map(|p| p.name.as_str())
+                            .collect::<Vec<_>>()
+                            .join(", ")
+                    ),
+                )),
+            },
+        )
+        .collect::<Result<Vec<_>>>()?;
     let model = ModelDef {
         partition,
         contributions,
@@ -675,6 +697,7 @@ pub fn build(deck: &Deck, deck_dir: &Path) -> Result<Scene> {
         constraints,
         reaction_sets,
         displacement_sets: deck.output.displacements.clone(),
+        peak_stress_parts,
         initial_velocity,
     };
     Ok(Scene {
@@ -956,6 +979,55 @@ fn part_mesh(m: &MeshDeck, f: &str, part: u32, deck_dir: &Path) -> Result<Mesh> 
             spec.check()
                 .map_err(|(field, why)| err(format!("{f}.mesh.{field}"), why))?;
             Ok(ring_mesh(&spec, part))
+        }
+        MeshDeck::Blocks {
+            solids,
+            holes,
+            cell_size,
+        } => {
+            if solids.is_empty() {
+                return Err(err(format!("{f}.mesh.solids"), "expected at least one box"));
+            }
+            for (what, list) in [("solids", solids), ("holes", holes)] {
+                for (i, b) in list.iter().enumerate() {
+                    if (0..3)
+                        .any(|a| !(b[0][a] < b[1][a] && b[0][a].is_finite() && b[1][a].is_finite()))
+                    {
+                        return Err(err(
+                            format!("{f}.mesh.{what}[{i}]"),
+                            format!(
+                                "expected [[min x, y, z], [max x, y, z]] with min < max, got {b:?}"
+                            ),
+                        ));
+                    }
+                }
+            }
+            if !(*cell_size > 0.0 && cell_size.is_finite()) {
+                return Err(err(
+                    format!("{f}.mesh.cell_size"),
+                    format!("expected a positive length, got {cell_size}"),
+                ));
+            }
+            let spec = crate::mesh::blocks::BlocksSpec {
+                solids: solids.clone(),
+                holes: holes.clone(),
+                cell_size: *cell_size,
+            };
+            let n = crate::mesh::blocks::lattice_cells(&spec);
+            if n > 2e7 {
+                return Err(err(
+                    format!("{f}.mesh.cell_size"),
+                    format!("{cell_size} makes a lattice of {n:.3e} cells; expected at most 2e7"),
+                ));
+            }
+            let mesh = crate::mesh::blocks::blocks_mesh(&spec, part);
+            if mesh.n_elems() == 0 {
+                return Err(err(
+                    format!("{f}.mesh.solids"),
+                    "no cell lies in a solid and outside every hole",
+                ));
+            }
+            Ok(mesh)
         }
         MeshDeck::Gmsh { file } => {
             let path = if Path::new(file).is_absolute() {

@@ -300,6 +300,15 @@ pub enum MeshDeck {
         #[serde(default)]
         center: [f64; 2],
     },
+    /// Hex8 cells of a lattice whose centres lie in one of the `solids` boxes and in none
+    /// of the `holes` ([[min], [max]] each); the lattice lines are the boxes' faces, spans
+    /// split into cells no longer than `cell_size`. No groups: select surfaces by box.
+    Blocks {
+        solids: Vec<[[f64; 3]; 2]>,
+        #[serde(default)]
+        holes: Vec<[[f64; 3]; 2]>,
+        cell_size: f64,
+    },
     /// A Gmsh MSH 4.1 ASCII file (hex8, tet4; physical groups become groups). A
     /// relative path is taken from the deck's directory.
     Gmsh { file: String },
@@ -647,6 +656,10 @@ pub struct OutputDeck {
     /// Node sets whose mean displacement goes to the history (`<set>.ux, .uy, .uz`).
     #[serde(default)]
     pub displacements: Vec<String>,
+    /// Parts whose largest element von Mises stress goes to the history
+    /// (`<part>.max_von_mises`) and, its largest over the run, to summary.json.
+    #[serde(default)]
+    pub peak_stress: Vec<String>,
 }
 
 fn yes() -> bool {
@@ -663,6 +676,7 @@ impl Default for OutputDeck {
             reactions: None,
             interval: None,
             displacements: Vec::new(),
+            peak_stress: Vec::new(),
         }
     }
 }

@@ -66,6 +66,11 @@ pub const BUILTIN: &[(&str, &str, &str)] = &[
         include_str!("scenes/two-body-hertz.toml"),
     ),
     (
+        "bolted-bracket",
+        "L-bracket bolted to a base plate by four pretensioned bolts, then 1 kN out and back in X, then in Y (the paper's 3.7)",
+        include_str!("scenes/bolted-bracket.toml"),
+    ),
+    (
         "patch-hex8",
         "patch test: distorted hex8 cube under homogeneous triaxial traction, linear elastic",
         include_str!("scenes/patch-hex8.toml"),
