@@ -7,6 +7,7 @@ use super::build::err;
 use crate::contact::law::{Threshold, DEFAULT_TANGENTIAL_AUGMENTATION};
 use crate::contact::mortar::{dual_coefficients, overlap_integrals};
 use crate::contact::pair::{face_shape, on_face, project_on_face};
+use crate::contact::search::{bounds, Bounds, BoxGrid};
 use crate::contact::wall::ContactMethod;
 use crate::mesh::select::tributary_areas;
 use crate::mesh::{FaceRef, Mesh};
@@ -77,12 +78,8 @@ fn mortar_integrals(
 ) -> Result<(BTreeMap<usize, BTreeMap<usize, f64>>, BTreeMap<usize, f64>)> {
     let mut m: BTreeMap<usize, BTreeMap<usize, f64>> = BTreeMap::new();
     let mut d_t: BTreeMap<usize, f64> = BTreeMap::new();
-    let bbox = |x: &[[f64; 3]]| -> ([f64; 3], [f64; 3]) {
-        let lo = std::array::from_fn(|c| x.iter().map(|p| p[c]).fold(f64::INFINITY, f64::min));
-        let hi = std::array::from_fn(|c| x.iter().map(|p| p[c]).fold(f64::NEG_INFINITY, f64::max));
-        (lo, hi)
-    };
-    let ref_boxes: Vec<([f64; 3], [f64; 3])> = ref_x.iter().map(|x| bbox(x)).collect();
+    let ref_boxes: Vec<Bounds> = ref_x.iter().map(|x| bounds(x)).collect();
+    let grid = BoxGrid::new(&ref_boxes, reach);
     for &tf in tracked {
         let tn = mesh.face_nodes(tf);
         let xs: Vec<[f64; 3]> = tn.iter().map(|&n| mesh.coords[n]).collect();
@@ -90,11 +87,8 @@ fn mortar_integrals(
         for (t, &n) in tn.iter().enumerate() {
             *d_t.entry(n).or_default() += d[t];
         }
-        let (lo, hi) = bbox(&xs);
-        for (k, (rlo, rhi)) in ref_boxes.iter().enumerate() {
-            if (0..3).any(|c| rlo[c] > hi[c] + reach || rhi[c] < lo[c] - reach) {
-                continue;
-            }
+        let (lo, hi) = bounds(&xs);
+        for k in grid.overlapping(lo, hi) {
             if ref_nodes[k].iter().any(|r| tn.contains(r)) {
                 continue;
             }
@@ -379,20 +373,14 @@ fn build_one(d: &PairsDeck, f: &str, inp: &PairInputs) -> Result<PairsDef> {
     };
     let mut pairs = Vec::new();
     let mut unpaired = 0;
+    // Candidates: the faces whose bounding box grown by the reach holds the node.
+    let grid = BoxGrid::new(&face_x.iter().map(|x| bounds(x)).collect::<Vec<_>>(), reach);
     for &n in &nodes {
         let x = mesh.coords[n];
         let mut best: Option<(f64, usize, [f64; 2])> = None;
-        for (k, xs) in face_x.iter().enumerate() {
+        for k in grid.overlapping(x, x) {
+            let xs = &face_x[k];
             if face_nodes[k].contains(&n) {
-                continue;
-            }
-            // Cheap rejection: the face's bounding box grown by the reach.
-            let far = (0..3).any(|c| {
-                let lo = xs.iter().map(|p| p[c]).fold(f64::INFINITY, f64::min);
-                let hi = xs.iter().map(|p| p[c]).fold(f64::NEG_INFINITY, f64::max);
-                x[c] < lo - reach || x[c] > hi + reach
-            });
-            if far {
                 continue;
             }
             let Some((xi, dist)) = project_on_face(x, xs) else {
