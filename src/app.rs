@@ -391,6 +391,8 @@ pub fn run(comm: &dyn Comm, opts: &RunOptions) -> Result<RunOutcome> {
         u = state.u;
         t
     } else {
+        // (analysis step, increments of it so far)
+        let mut stage_seen = (0usize, 0usize);
         run_static(
             comm,
             &mut model,
@@ -398,7 +400,23 @@ pub fn run(comm: &dyn Comm, opts: &RunOptions) -> Result<RunOutcome> {
             analysis,
             nopts,
             &mut |rec, u, m| {
-                let fields = rec.step % every == 0 || rec.time >= end_time;
+                // With analysis steps: every n-th increment of the step, and its last.
+                let fields = match analysis.stages.get(rec.stage) {
+                    Some(st) => {
+                        if rec.stage != stage_seen.0 {
+                            stage_seen = (rec.stage, 0);
+                        }
+                        stage_seen.1 += 1;
+                        let n = settings
+                            .output
+                            .stage_every
+                            .get(rec.stage)
+                            .copied()
+                            .unwrap_or(every);
+                        stage_seen.1 % n == 0 || rec.time >= st.end - 1e-9 * end_time.max(1.0)
+                    }
+                    None => rec.step % every == 0 || rec.time >= end_time,
+                };
                 writer.step(comm, rec, u, m, fields)?;
                 records.push(rec.clone());
                 if !quiet {

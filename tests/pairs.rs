@@ -295,7 +295,7 @@ fn two_analysis_steps_are_the_one_step_deck() {
     let staged = edit(&staged, "end_time = 2.0\n", "");
     let staged = format!(
         "{staged}\n[[steps]]\nname = \"pretension\"\nduration = 1.0\n\
-         [[steps]]\nname = \"service\"\nduration = 1.0\nstep = 0.25\n"
+         [[steps]]\nname = \"service\"\nduration = 1.0\nstep = 0.25\noutput_every = 3\n"
     );
     let two = run_deck("steps-two", &staged);
     let t = column(&two, "time");
@@ -336,6 +336,16 @@ fn two_analysis_steps_are_the_one_step_deck() {
         .map(|s| s["nonlinear_iterations"].as_u64().unwrap())
         .sum();
     assert_eq!(Some(its), summary["nonlinear_iterations"].as_u64());
+    // Fields: every increment of the first step; every third of the second, and its last.
+    let xmf =
+        std::fs::read_to_string(std::path::Path::new(&two.summary.output_dir).join("bolt-bar.xmf"))
+            .unwrap();
+    let times: Vec<&str> = xmf
+        .split("<Time Value=\"")
+        .skip(1)
+        .map(|s| s.split('"').next().unwrap())
+        .collect();
+    assert_eq!(times, vec!["0.5", "1.0", "1.75", "2.0"], "{xmf}");
 }
 
 /// Step mistakes name their field.

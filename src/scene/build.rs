@@ -830,6 +830,11 @@ fn run_settings(deck: &Deck, timeline: &super::steps::Timeline) -> RunSettings {
         output: OutputSettings {
             every: deck.output.every,
             interval: deck.output.interval.unwrap_or(a.end_time / 100.0),
+            stage_every: deck
+                .steps
+                .iter()
+                .map(|s| s.output_every.unwrap_or(deck.output.every))
+                .collect(),
         },
     }
 }

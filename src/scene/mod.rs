@@ -40,12 +40,14 @@ pub struct RunSettings {
 }
 
 /// When fields are written.
-#[derive(Debug, Clone, Copy, Serialize, Deserialize)]
+#[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct OutputSettings {
     /// Static runs: every n-th converged step (the last always).
     pub every: usize,
     /// Dynamic runs: at every multiple of this time (and the initial and last states).
     pub interval: f64,
+    /// Static runs with analysis steps: `every` of each step (its last increment always).
+    pub stage_every: Vec<usize>,
 }
 
 /// Built-in scenes: (name, one-line description, deck text).

@@ -31,6 +31,10 @@ pub struct StepDeck {
     pub min_step: Option<f64>,
     #[serde(default)]
     pub max_step: Option<f64>,
+    /// Static runs: write fields every n-th increment of this step (default `[output]
+    /// every`); a step's last increment is always written.
+    #[serde(default)]
+    pub output_every: Option<usize>,
 }
 
 /// The deck with `analysis.end_time` filled in from its steps (their total duration),
@@ -91,6 +95,9 @@ pub fn stages(deck: &Deck) -> Result<Vec<Stage>> {
                     ));
                 }
             }
+        }
+        if s.output_every == Some(0) {
+            return Err(err(format!("{f}.output_every"), "expected at least 1"));
         }
         let max_step = s.max_step.unwrap_or(step);
         let min_step = s.min_step.unwrap_or(a.min_step.unwrap_or(step * 1e-3));
