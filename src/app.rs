@@ -413,7 +413,8 @@ pub fn run(comm: &dyn Comm, opts: &RunOptions) -> Result<RunOutcome> {
                             .get(rec.stage)
                             .copied()
                             .unwrap_or(every);
-                        stage_seen.1 % n == 0 || rec.time >= st.end - 1e-9 * end_time.max(1.0)
+                        stage_seen.1.is_multiple_of(n)
+                            || rec.time >= st.end - 1e-9 * end_time.max(1.0)
                     }
                     None => rec.step % every == 0 || rec.time >= end_time,
                 };
