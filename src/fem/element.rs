@@ -65,6 +65,9 @@ pub enum Formulation {
     Reduced {
         hourglass: f64,
     },
+    /// Enhanced assumed strains, Q1/E9 ([`super::eas`]): bends with one element through
+    /// a thin wall.
+    Eas,
 }
 
 impl Formulation {
@@ -80,6 +83,15 @@ impl Formulation {
 
 /// Number of integration points of the kind's rule under `form` (history is stored per
 /// point).
+/// History values of one element: its points' material history (and, for EAS, its
+/// enhanced parameters after them).
+pub fn state_len(kind: ElemKind, form: Formulation, n_state: usize) -> usize {
+    match (kind, form) {
+        (ElemKind::Hex8, Formulation::Eas) => super::eas::state_len(n_state),
+        _ => n_gauss(kind, form) * n_state,
+    }
+}
+
 pub fn n_gauss(kind: ElemKind, form: Formulation) -> usize {
     match (kind, form) {
         (ElemKind::Hex8, Formulation::Reduced { .. }) => 1,
@@ -118,6 +130,9 @@ pub fn element_force(
 ) -> Result<(), ElementError> {
     match kind {
         ElemKind::Hex8 => match form {
+            Formulation::Eas => {
+                super::eas::force(nodes(x0), nodes(u), mat, state_old, state_new, f, k)
+            }
             Formulation::Reduced { hourglass } => super::reduced::force(
                 nodes(x0),
                 nodes(u),
@@ -183,6 +198,9 @@ pub fn element_stress(
     match kind {
         ElemKind::Hex8 if matches!(form, Formulation::Reduced { .. }) => {
             super::reduced::stress(nodes(x0), nodes(u), mat, state_old)
+        }
+        ElemKind::Hex8 if form == Formulation::Eas => {
+            super::eas::stress(nodes(x0), nodes(u), mat, state_old)
         }
         ElemKind::Hex8 => stress_kernel(&HEX8, form.is_fbar(), nodes(x0), nodes(u), mat, state_old),
         ElemKind::Tet4 => stress_kernel(&TET4, false, nodes(x0), nodes(u), mat, state_old),

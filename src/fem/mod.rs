@@ -1,6 +1,7 @@
 //! Element kernels: shape functions, quadrature, internal force and tangent, surface
 //! loads. Pure functions of element data: no MPI, no global numbering.
 
+pub mod eas;
 pub mod element;
 pub mod mass;
 pub mod reduced;

@@ -8,7 +8,7 @@ use super::contribution::{
 };
 use super::def::MaterialDef;
 use super::distribute::LocalElements;
-use crate::fem::element::{element_force, element_stress, n_gauss, von_mises};
+use crate::fem::element::{element_force, element_stress, n_gauss, state_len, von_mises};
 use crate::material::Material;
 
 pub struct Solids {
@@ -34,8 +34,11 @@ impl Solids {
         let mut s = 0;
         for e in 0..elements.len() {
             state_offset.push(s);
-            s += n_gauss(elements.kinds[e], elements.formulation[e])
-                * built[elements.material[e] as usize].n_state();
+            s += state_len(
+                elements.kinds[e],
+                elements.formulation[e],
+                built[elements.material[e] as usize].n_state(),
+            );
         }
         state_offset.push(s);
         Self {
@@ -104,7 +107,9 @@ impl Solids {
                 if ns == 0 || h.is_empty() {
                     return 0.0;
                 }
-                let pts = h.chunks(ns);
+                // EAS keeps its enhanced parameters after the points' history.
+                let ng = n_gauss(self.elements.kinds[e], self.elements.formulation[e]);
+                let pts = h[..ng * ns].chunks(ns);
                 let n = pts.len() as f64;
                 pts.map(|s| mat.equivalent_plastic_strain(s).unwrap_or(0.0))
                     .sum::<f64>()

@@ -1242,6 +1242,7 @@ fn part_formulation_of(p: &PartDeck, material: &MaterialDef, field: &str) -> Res
         FormulationDeck::Standard => Formulation::Standard,
         FormulationDeck::Fbar => Formulation::FBAR,
         FormulationDeck::Reduced => Formulation::REDUCED,
+        FormulationDeck::Eas => Formulation::Eas,
         FormulationDeck::Auto if material.wants_fbar() => Formulation::FBAR,
         FormulationDeck::Auto => Formulation::Standard,
     };
@@ -1257,10 +1258,10 @@ fn part_formulation_of(p: &PartDeck, material: &MaterialDef, field: &str) -> Res
     match form {
         Formulation::FBar { .. } => Ok(Formulation::FBar { hourglass: h }),
         Formulation::Reduced { .. } => Ok(Formulation::Reduced { hourglass: h }),
-        Formulation::Standard => Err(err(
+        Formulation::Standard | Formulation::Eas => Err(err(
             format!("{field}.hourglass"),
             "only F-bar and reduced hex8 have an hourglass spring; this part's elements are \
-             standard (set formulation = \"fbar\" or \"reduced\")",
+             standard or EAS (set formulation = \"fbar\" or \"reduced\")",
         )),
     }
 }

@@ -210,6 +210,9 @@ pub enum FormulationDeck {
     Fbar,
     /// One point and hourglass stiffness (LS-DYNA's ELFORM 1): for large compression.
     Reduced,
+    /// Enhanced assumed strains (Simo–Armero Q1/E9): thin walls bend with one element
+    /// through the thickness.
+    Eas,
 }
 
 #[derive(Debug, Clone, Deserialize, Serialize)]

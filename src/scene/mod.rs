@@ -73,6 +73,11 @@ pub const BUILTIN: &[(&str, &str, &str)] = &[
         include_str!("scenes/bolted-bracket.toml"),
     ),
     (
+        "scordelis-lo",
+        "Scordelis–Lo roof: a thin cylindrical shell under its weight, one EAS hex8 through the thickness",
+        include_str!("scenes/scordelis-lo.toml"),
+    ),
+    (
         "patch-hex8",
         "patch test: distorted hex8 cube under homogeneous triaxial traction, linear elastic",
         include_str!("scenes/patch-hex8.toml"),
