@@ -271,3 +271,14 @@ fn scordelis_lo_roof() {
     let uy = *column(&out, "midside.uy").last().unwrap();
     assert!(-uy < 0.5 * 0.3024, "standard: {uy}");
 }
+
+/// The pinched cylinder (`tests/pinched-cylinder.toml`): within 5 % of 1.8248e-5 per
+/// unit load on 32 × 32 with one EAS hex8 through the thickness (measured −2.7 %).
+#[test]
+fn pinched_cylinder() {
+    let out = run_deck("pinched", include_str!("pinched-cylinder.toml"));
+    // Two nodes (inner and outer surface) carry P/8 each in the one-eighth model.
+    let p = 1e4;
+    let uy = *column(&out, "load_point.uy").last().unwrap();
+    assert!(rel_err(-uy / p, 1.8248e-5) < 0.05, "uy / P = {}", uy / p);
+}
