@@ -78,6 +78,11 @@ pub const BUILTIN: &[(&str, &str, &str)] = &[
         include_str!("scenes/scordelis-lo.toml"),
     ),
     (
+        "b-pillar",
+        "hat-section steel channel pressed 100 mm by a cylindrical impactor on two supports (the paper's 3.4), EAS hex8 sheet",
+        include_str!("scenes/b-pillar.toml"),
+    ),
+    (
         "patch-hex8",
         "patch test: distorted hex8 cube under homogeneous triaxial traction, linear elastic",
         include_str!("scenes/patch-hex8.toml"),
