@@ -21,7 +21,8 @@
 //! hourglass instabilities; `reduced` is the element for that.
 
 use super::element::{
-    add_force, add_tangent, cofactor, reference_point, ElementError, LocalTangent,
+    add_force, add_tangent, cofactor, deformation_gradient, reference_point, ElementError,
+    LocalTangent,
 };
 use super::shape::HEX8;
 use crate::material::{Kinematics, Material, StressPoint};
@@ -119,16 +120,9 @@ fn bilinear(sp: &StressPoint, l1: &M3, l2: &M3, finite: bool) -> f64 {
     s
 }
 
-/// Per point: F and F⁻¹ (identity for small kinematics).
+/// The enhanced F = I + Grad u + Σ α_k H_k at one point.
 fn point_f(u: &[[f64; 3]; 8], grad0: &[[f64; 3]; 8], modes: &[M3; N_ALPHA], alpha: &[f64]) -> M3 {
-    let mut f = M3::identity();
-    for (ua, g) in u.iter().zip(grad0) {
-        for r in 0..3 {
-            for c in 0..3 {
-                f[(r, c)] += ua[r] * g[c];
-            }
-        }
-    }
+    let mut f = deformation_gradient(u, grad0);
     for (h, a) in modes.iter().zip(alpha) {
         f += h * *a;
     }

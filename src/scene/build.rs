@@ -43,7 +43,7 @@ pub(super) fn unique_names<'a>(what: &str, names: impl Iterator<Item = &'a str>)
     Ok(())
 }
 
-fn known(names: &BTreeMap<String, impl Sized>) -> String {
+pub(super) fn known(names: &BTreeMap<String, impl Sized>) -> String {
     if names.is_empty() {
         "none defined".into()
     } else {
@@ -281,15 +281,7 @@ pub fn build(deck: &Deck, deck_dir: &Path) -> Result<Scene> {
     let curve = |field: String, name: &Option<String>| -> Result<Curve> {
         match name {
             None => Ok(Curve::ramp(a.end_time)),
-            Some(n) => {
-                let f = field.strip_suffix(".curve").unwrap_or(&field);
-                timeline.curve(f, name, &None).map_err(|_| {
-                    err(
-                        field.clone(),
-                        format!("unknown curve `{n}` ({})", known(&curves)),
-                    )
-                })
-            }
+            Some(n) => timeline.named(&field, n),
         }
     };
     // A boundary condition or nodal load may name a node set or a surface (its nodes).

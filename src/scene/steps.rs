@@ -177,20 +177,7 @@ impl<'a> Timeline<'a> {
         };
         let base = match name {
             None => Curve::ramp(window.map_or(self.end, |(a, b)| b - a)),
-            Some(n) => self.curves.get(n).cloned().ok_or_else(|| {
-                let known: Vec<&str> = self.curves.keys().map(|k| k.as_str()).collect();
-                err(
-                    format!("{f}.curve"),
-                    format!(
-                        "unknown curve `{n}` ({})",
-                        if known.is_empty() {
-                            "none defined".to_string()
-                        } else {
-                            format!("defined: {}", known.join(", "))
-                        }
-                    ),
-                )
-            })?,
+            Some(n) => self.lookup(&format!("{f}.curve"), n)?,
         };
         let Some((t0, t1)) = window else {
             self.record(base.points.iter().map(|p| p[0]));
@@ -220,6 +207,26 @@ impl<'a> Timeline<'a> {
         let points: Vec<[f64; 2]> = taus.iter().map(|&x| [t0 + x, base.eval(x)]).collect();
         self.record(points.iter().map(|p| p[0]));
         Ok(Curve { points })
+    }
+
+    /// The `[[curves]]` entry `name`, named at `field`, on the analysis' time line (for
+    /// entries that take no step: walls' and entities' motions).
+    pub fn named(&self, field: &str, name: &str) -> Result<Curve> {
+        let c = self.lookup(field, name)?;
+        self.record(c.points.iter().map(|p| p[0]));
+        Ok(c)
+    }
+
+    fn lookup(&self, field: &str, name: &str) -> Result<Curve> {
+        self.curves.get(name).cloned().ok_or_else(|| {
+            err(
+                field,
+                format!(
+                    "unknown curve `{name}` ({})",
+                    super::build::known(self.curves)
+                ),
+            )
+        })
     }
 
     /// The end of the step named by entry `f`'s field `f.step`.
