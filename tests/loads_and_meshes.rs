@@ -345,6 +345,57 @@ displacements = ["end"]
         e.contains("output.peak_stress[0]: unknown part `bra` (parts: bar)"),
         "{e}"
     );
+    // Placed: turned 90° about z and moved; the same answer along the bar's new axis.
+    let mut placed = deck.replace(
+        "solids = [[[0, 0, 0], [10, 4, 3]], [[10, 0, 0], [20, 4, 3]]] }",
+        "solids = [[[0, 0, 0], [10, 4, 3]], [[10, 0, 0], [20, 4, 3]]] }\nrotate = { axis = [0, 0, 2], angle = 90 }\ntranslate = [5, -1, 2]",
+    );
+    for (from, to) in [
+        (
+            "min = [0, 0, 0], max = [0, 4, 3]",
+            "min = [1, -1, 2], max = [5, -1, 5]",
+        ),
+        (
+            "min = [0, 0, 0], max = [0, 4, 0]",
+            "min = [1, -1, 2], max = [5, -1, 2]",
+        ),
+        (
+            "min = [0, 0, 0], max = [0, 0, 0]",
+            "min = [5, -1, 2], max = [5, -1, 2]",
+        ),
+        (
+            "min = [20, 0, 0], max = [20, 4, 3]",
+            "min = [1, 19, 2], max = [5, 19, 5]",
+        ),
+        (
+            "set = \"root\"\ncomponents = [\"x\"]",
+            "set = \"root\"\ncomponents = [\"y\"]",
+        ),
+        (
+            "set = \"root_corner\"\ncomponents = [\"y\"]",
+            "set = \"root_corner\"\ncomponents = [\"x\"]",
+        ),
+        ("traction = [25, 0, 0]", "traction = [0, 25, 0]"),
+    ] {
+        placed = edit(&placed, from, to);
+    }
+    let out = run_deck("blocks-bar-placed", &placed);
+    assert!(field(&out, "von_mises")
+        .iter()
+        .all(|v| (v - 25.0).abs() < 1e-9));
+    assert!((column(&out, "end.uy")[0] - 0.5).abs() < 1e-9);
+    assert!(column(&out, "end.ux")[0].abs() < 1e-9);
+    let e = try_run_deck(
+        "blocks-bar-bad-axis",
+        &placed.replace("axis = [0, 0, 2]", "axis = [0, 0, 0]"),
+    )
+    .err()
+    .unwrap()
+    .to_string();
+    assert!(
+        e.contains("parts[0].rotate.axis: expected a non-zero finite vector"),
+        "{e}"
+    );
     let bad = deck.replace("cell_size = 1.5", "cell_size = 1e-6");
     let e = try_run_deck("blocks-bar-bad2", &bad)
         .err()

@@ -3,9 +3,11 @@
 //! Volume elements (hex8, tet4) become the mesh; lower-dimensional elements only define
 //! groups: every physical group gives a node group, physical surfaces also give face
 //! groups (matched to volume-element faces by node set), physical volumes element groups.
+//! A surface mesh of quads is read instead as a [`Surface`] that `mesh::sheet` extrudes.
 
 use std::collections::{BTreeMap, HashMap};
 
+use super::sheet::Surface;
 use super::{ElemKind, FaceRef, Mesh};
 
 /// Whitespace-separated tokens with line numbers; a double-quoted string is one token.
@@ -141,9 +143,51 @@ fn elem_type_name(t: u64) -> String {
     format!("type {t} ({name})")
 }
 
-/// Read an ASCII Gmsh MSH 4.1 file. Nodes are renumbered 0..n in order of appearance;
-/// volume elements get part index `part`.
-pub fn read_msh(text: &str, part: u32) -> Result<Mesh, String> {
+/// One element as read: its entity's dimension and tag, element tag, line, node count
+/// and where its (renumbered) nodes start in [`Raw::conn`].
+struct RawElem {
+    dim: usize,
+    entity: i64,
+    tag: u64,
+    line: usize,
+    nn: usize,
+    at: usize,
+}
+
+/// A parsed file before it becomes a volume or a sheet mesh.
+struct Raw {
+    coords: Vec<[f64; 3]>,
+    /// Physical groups: (dim, tag) -> name.
+    phys_names: HashMap<(usize, i64), String>,
+    /// (dim, entity tag) -> physical tags.
+    entity_phys: HashMap<(usize, i64), Vec<i64>>,
+    elems: Vec<RawElem>,
+    conn: Vec<usize>,
+}
+
+impl Raw {
+    fn nodes(&self, e: &RawElem) -> &[usize] {
+        &self.conn[e.at..e.at + e.nn]
+    }
+    fn group_name(&self, dim: usize, tag: i64) -> String {
+        self.phys_names
+            .get(&(dim, tag))
+            .cloned()
+            .unwrap_or_else(|| format!("group{tag}"))
+    }
+    /// The physical groups (names) an element's entity belongs to.
+    fn groups(&self, e: &RawElem) -> Vec<String> {
+        self.entity_phys
+            .get(&(e.dim, e.entity))
+            .into_iter()
+            .flatten()
+            .map(|&t| self.group_name(e.dim, t))
+            .collect()
+    }
+}
+
+/// Parse an ASCII Gmsh MSH 4.1 file; nodes are renumbered 0..n in order of appearance.
+fn parse(text: &str) -> Result<Raw, String> {
     let mut lx = Lexer {
         s: text,
         pos: 0,
@@ -173,18 +217,14 @@ pub fn read_msh(text: &str, part: u32) -> Result<Mesh, String> {
     lx.tok("the data size")?;
     lx.end()?;
 
-    // Physical groups: (dim, tag) -> name; (dim, entity tag) -> physical tags.
-    let mut phys_names: HashMap<(usize, i64), String> = HashMap::new();
-    let mut entity_phys: HashMap<(usize, i64), Vec<i64>> = HashMap::new();
-    let mut mesh = Mesh {
-        offsets: vec![0],
-        ..Default::default()
+    let mut raw = Raw {
+        coords: Vec::new(),
+        phys_names: HashMap::new(),
+        entity_phys: HashMap::new(),
+        elems: Vec::new(),
+        conn: Vec::new(),
     };
     let mut node_index: HashMap<u64, usize> = HashMap::new();
-    // Lower-dimensional elements kept for groups: (dim, entity tag, element tag, line, nodes).
-    let mut group_elems: Vec<(usize, i64, u64, usize, Vec<usize>)> = Vec::new();
-    // Volume elements' (entity tag, element tag).
-    let mut vol_elems: Vec<(i64, u64)> = Vec::new();
     let (mut seen_nodes, mut seen_elems) = (false, false);
 
     while let Some((t, line)) = lx.next() {
@@ -206,7 +246,7 @@ pub fn read_msh(text: &str, part: u32) -> Result<Mesh, String> {
                             "line {line}: expected a quoted physical group name, found {q}"
                         ));
                     };
-                    phys_names.insert((dim, tag), s.to_string());
+                    raw.phys_names.insert((dim, tag), s.to_string());
                 }
             }
             "Entities" => {
@@ -233,7 +273,7 @@ pub fn read_msh(text: &str, part: u32) -> Result<Mesh, String> {
                             lx.skip(nb, "a bounding entity tag")?;
                         }
                         if !tags.is_empty() {
-                            entity_phys.insert((dim, tag), tags);
+                            raw.entity_phys.insert((dim, tag), tags);
                         }
                     }
                 }
@@ -243,7 +283,7 @@ pub fn read_msh(text: &str, part: u32) -> Result<Mesh, String> {
                 let blocks = lx.count("the number of node blocks")?;
                 let total = lx.count("the number of nodes")?;
                 lx.skip(2, "the min and max node tags")?;
-                mesh.coords.reserve(total);
+                raw.coords.reserve(total);
                 let mut tags = Vec::new();
                 for _ in 0..blocks {
                     let edim = lx.count("an entity dimension")?;
@@ -256,7 +296,7 @@ pub fn read_msh(text: &str, part: u32) -> Result<Mesh, String> {
                         let tag: u64 =
                             t.parse().map_err(|_| format!("line {line}: expected a node tag (a positive integer), found \"{t}\""))?;
                         if node_index
-                            .insert(tag, mesh.coords.len() + tags.len())
+                            .insert(tag, raw.coords.len() + tags.len())
                             .is_some()
                         {
                             return Err(format!(
@@ -274,7 +314,7 @@ pub fn read_msh(text: &str, part: u32) -> Result<Mesh, String> {
                         if parametric {
                             lx.skip(edim, "a parametric coordinate")?;
                         }
-                        mesh.coords.push(x);
+                        raw.coords.push(x);
                     }
                 }
             }
@@ -295,16 +335,15 @@ pub fn read_msh(text: &str, part: u32) -> Result<Mesh, String> {
                             _ => ("an element block has".to_string(), type_line),
                         };
                         return Err(format!(
-                            "line {line}: {what} {}, which alfe does not read; use first-order hex8 or tet4 volumes (Mesh.ElementOrder = 1)",
+                            "line {line}: {what} {}, which alfe does not read; use first-order hex8 or tet4 volumes, or quad4 sheets (Mesh.ElementOrder = 1)",
                             elem_type_name(ty)
                         ));
                     };
-                    let mut nodes = Vec::with_capacity(nn);
                     for _ in 0..n {
                         let (t, line) = lx.tok("an element tag")?;
                         let etag: u64 =
                             t.parse().map_err(|_| format!("line {line}: expected an element tag (a positive integer), found \"{t}\""))?;
-                        nodes.clear();
+                        let at = raw.conn.len();
                         for _ in 0..nn {
                             let (t, l) = lx.tok("a node tag")?;
                             let ntag: u64 = t.parse().map_err(|_| {
@@ -318,26 +357,16 @@ pub fn read_msh(text: &str, part: u32) -> Result<Mesh, String> {
                                 };
                                 return Err(format!("line {l}: element {etag} has node tag {ntag} that is not in $Nodes{hint}"));
                             };
-                            nodes.push(v);
+                            raw.conn.push(v);
                         }
-                        if dim == 3 {
-                            let kind = if nn == 8 {
-                                ElemKind::Hex8
-                            } else {
-                                ElemKind::Tet4
-                            };
-                            mesh.push_elem(kind, &nodes, part);
-                            let e = mesh.n_elems() - 1;
-                            if mesh.elem_volume(e) <= 0.0 {
-                                return Err(format!(
-                                    "line {line}: element {etag} ({}) has zero or negative volume; its node order is inverted or it is degenerate",
-                                    kind.name()
-                                ));
-                            }
-                            vol_elems.push((entity, etag));
-                        } else if entity_phys.contains_key(&(dim, entity)) {
-                            group_elems.push((dim, entity, etag, line, nodes.clone()));
-                        }
+                        raw.elems.push(RawElem {
+                            dim,
+                            entity,
+                            tag: etag,
+                            line,
+                            nn,
+                            at,
+                        });
                     }
                 }
             }
@@ -364,23 +393,38 @@ pub fn read_msh(text: &str, part: u32) -> Result<Mesh, String> {
             if seen_nodes { "Elements" } else { "Nodes" }
         ));
     }
-    if mesh.n_elems() == 0 {
-        return Err("mesh file has no hex8 or tet4 volume elements; add a physical volume or set Mesh.SaveAll = 1".to_string());
-    }
+    Ok(raw)
+}
 
-    let group_name = |dim: usize, tag: i64| {
-        phys_names
-            .get(&(dim, tag))
-            .cloned()
-            .unwrap_or_else(|| format!("group{tag}"))
+/// Read an ASCII Gmsh MSH 4.1 volume mesh; volume elements get part index `part`.
+pub fn read_msh(text: &str, part: u32) -> Result<Mesh, String> {
+    let raw = parse(text)?;
+    let mut mesh = Mesh {
+        coords: raw.coords.clone(),
+        offsets: vec![0],
+        ..Default::default()
     };
     let mut node_groups: BTreeMap<String, Vec<usize>> = BTreeMap::new();
     let mut face_groups: BTreeMap<String, Vec<FaceRef>> = BTreeMap::new();
     let mut elem_groups: BTreeMap<String, Vec<usize>> = BTreeMap::new();
 
-    for (e, &(entity, _)) in vol_elems.iter().enumerate() {
-        for &tag in entity_phys.get(&(3, entity)).into_iter().flatten() {
-            let name = group_name(3, tag);
+    for re in raw.elems.iter().filter(|e| e.dim == 3) {
+        let kind = if re.nn == 8 {
+            ElemKind::Hex8
+        } else {
+            ElemKind::Tet4
+        };
+        mesh.push_elem(kind, raw.nodes(re), part);
+        let e = mesh.n_elems() - 1;
+        if mesh.elem_volume(e) <= 0.0 {
+            return Err(format!(
+                "line {}: element {} ({}) has zero or negative volume; its node order is inverted or it is degenerate",
+                re.line,
+                re.tag,
+                kind.name()
+            ));
+        }
+        for name in raw.groups(re) {
             node_groups
                 .entry(name.clone())
                 .or_default()
@@ -388,9 +432,22 @@ pub fn read_msh(text: &str, part: u32) -> Result<Mesh, String> {
             elem_groups.entry(name).or_default().push(e);
         }
     }
+    if mesh.n_elems() == 0 {
+        let hint = if raw.elems.iter().any(|e| e.dim == 2) {
+            " (a surface mesh of a sheet is read by kind = \"sheet\")"
+        } else {
+            ""
+        };
+        return Err(format!("mesh file has no hex8 or tet4 volume elements; add a physical volume or set Mesh.SaveAll = 1{hint}"));
+    }
 
+    let grouped: Vec<&RawElem> = raw
+        .elems
+        .iter()
+        .filter(|e| e.dim < 3 && raw.entity_phys.contains_key(&(e.dim, e.entity)))
+        .collect();
     let mut faces: HashMap<Vec<usize>, FaceRef> = HashMap::new();
-    if group_elems.iter().any(|g| g.0 == 2) {
+    if grouped.iter().any(|g| g.dim == 2) {
         for e in 0..mesh.n_elems() {
             for f in 0..mesh.kinds[e].faces().len() {
                 let fr = FaceRef {
@@ -403,19 +460,20 @@ pub fn read_msh(text: &str, part: u32) -> Result<Mesh, String> {
             }
         }
     }
-    for (dim, entity, etag, line, nodes) in &group_elems {
-        for &tag in &entity_phys[&(*dim, *entity)] {
-            let name = group_name(*dim, tag);
+    for re in grouped {
+        let nodes = raw.nodes(re);
+        for name in raw.groups(re) {
             node_groups
                 .entry(name.clone())
                 .or_default()
                 .extend_from_slice(nodes);
-            if *dim == 2 {
-                let mut key = nodes.clone();
+            if re.dim == 2 {
+                let mut key = nodes.to_vec();
                 key.sort_unstable();
                 let Some(&f) = faces.get(&key) else {
                     return Err(format!(
-                        "line {line}: element {etag} of physical surface \"{name}\" is not a face of any hex8 or tet4 element"
+                        "line {}: element {} of physical surface \"{name}\" is not a face of any hex8 or tet4 element",
+                        re.line, re.tag
                     ));
                 };
                 face_groups.entry(name).or_default().push(f);
@@ -435,6 +493,57 @@ pub fn read_msh(text: &str, part: u32) -> Result<Mesh, String> {
     mesh.face_groups = face_groups;
     mesh.elem_groups = elem_groups;
     Ok(mesh)
+}
+
+/// Read an ASCII Gmsh MSH 4.1 surface mesh of quad4 elements (a sheet's middle or outer
+/// surface) with its physical surfaces, curves and points, for [`super::sheet`].
+pub fn read_surface(text: &str) -> Result<Surface, String> {
+    let raw = parse(text)?;
+    if let Some(v) = raw.elems.iter().find(|e| e.dim == 3) {
+        return Err(format!(
+            "line {}: element {} is a volume element; a sheet is read from a surface mesh of quad4 elements (read volume meshes with kind = \"gmsh\")",
+            v.line, v.tag
+        ));
+    }
+    if let Some(t) = raw.elems.iter().find(|e| e.dim == 2 && e.nn != 4) {
+        return Err(format!(
+            "line {}: element {} is a triangle; a sheet is extruded from quad4 elements only (Mesh.RecombineAll = 1)",
+            t.line, t.tag
+        ));
+    }
+    let mut s = Surface {
+        coords: raw.coords.clone(),
+        ..Default::default()
+    };
+    for re in &raw.elems {
+        let nodes = raw.nodes(re);
+        match re.dim {
+            2 => {
+                for name in raw.groups(re) {
+                    s.quad_groups.entry(name).or_default().push(s.quads.len());
+                }
+                s.quads.push([nodes[0], nodes[1], nodes[2], nodes[3]]);
+                s.quad_lines.push((re.line, re.tag));
+            }
+            1 => {
+                for name in raw.groups(re) {
+                    s.edge_groups
+                        .entry(name)
+                        .or_default()
+                        .push([nodes[0], nodes[1]]);
+                }
+            }
+            _ => {
+                for name in raw.groups(re) {
+                    s.point_groups.entry(name).or_default().push(nodes[0]);
+                }
+            }
+        }
+    }
+    if s.quads.is_empty() {
+        return Err("mesh file has no quad4 surface elements to extrude".to_string());
+    }
+    Ok(s)
 }
 
 #[cfg(test)]
@@ -576,6 +685,33 @@ $EndElements
         assert_eq!(m.face_groups["group8"].len(), 1);
         assert_eq!(m.node_groups["group8"], vec![1, 2, 3]);
         assert_eq!(m.elem_groups["group9"], vec![0, 1]);
+    }
+
+    #[test]
+    fn reads_a_quad_surface_for_a_sheet() {
+        let quads = HEXES
+            .replace("$Elements\n3 5 1 5\n", "$Elements\n2 3 1 3\n")
+            .replace(
+                "3 1 5 2\n4 10 13 22 19 28 31 40 37\n5 13 16 25 22 31 34 43 40\n",
+                "",
+            );
+        let s = read_surface(&quads).unwrap();
+        assert_eq!(s.quads, vec![[0, 3, 4, 1], [1, 4, 5, 2]]);
+        assert_eq!(s.quad_lines, vec![(53, 2), (54, 3)]);
+        assert_eq!(s.quad_groups["bottom face"], vec![0, 1]);
+        assert_eq!(s.point_groups["corner"], vec![0]);
+        let e = read_msh(&quads, 0).unwrap_err();
+        assert!(e.contains("read by kind = \"sheet\""), "{e}");
+        let e = read_surface(HEXES).unwrap_err();
+        assert!(e.contains("element 4 is a volume element"), "{e}");
+        let e = read_surface(
+            &quads
+                .replace("2 1 3 2", "2 1 2 2")
+                .replace("2 10 19 22 13", "2 10 19 22")
+                .replace("3 13 22 25 16", "3 13 22 25"),
+        )
+        .unwrap_err();
+        assert!(e.contains("element 2 is a triangle"), "{e}");
     }
 
     #[test]

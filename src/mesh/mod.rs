@@ -8,6 +8,7 @@ pub mod cylinder;
 pub mod generate;
 pub mod gmsh;
 pub mod select;
+pub mod sheet;
 
 use std::collections::BTreeMap;
 

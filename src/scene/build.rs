@@ -107,7 +107,8 @@ pub fn build(deck: &Deck, deck_dir: &Path) -> Result<Scene> {
         };
         part_material.push(mi);
         part_formulation.push(part_formulation_of(p, &materials[mi].1, &f)?);
-        let pm = part_mesh(&p.mesh, &f, pi as u32, deck_dir)?;
+        let mut pm = part_mesh(&p.mesh, &f, pi as u32, deck_dir)?;
+        place(&mut pm, p, &f)?;
         // Reference-configuration validity of every element.
         for e in 0..pm.n_elems() {
             let x0: Vec<[f64; 3]> = pm.elem_nodes(e).iter().map(|&n| pm.coords[n]).collect();
@@ -831,6 +832,48 @@ fn run_settings(deck: &Deck, timeline: &super::steps::Timeline) -> RunSettings {
     }
 }
 
+/// Rotate (Rodrigues) and translate a part's mesh as its deck says.
+fn place(mesh: &mut Mesh, p: &PartDeck, f: &str) -> Result<()> {
+    if let Some(r) = &p.rotate {
+        let n = (r.axis.iter().map(|a| a * a).sum::<f64>()).sqrt();
+        if !(n > 0.0 && n.is_finite()) {
+            return Err(err(
+                format!("{f}.rotate.axis"),
+                format!("expected a non-zero finite vector, got {:?}", r.axis),
+            ));
+        }
+        if !r.angle.is_finite() {
+            return Err(err(
+                format!("{f}.rotate.angle"),
+                format!("expected a finite angle in degrees, got {}", r.angle),
+            ));
+        }
+        let k = r.axis.map(|a| a / n);
+        let (s, c) = r.angle.to_radians().sin_cos();
+        for x in mesh.coords.iter_mut() {
+            let kx = [
+                k[1] * x[2] - k[2] * x[1],
+                k[2] * x[0] - k[0] * x[2],
+                k[0] * x[1] - k[1] * x[0],
+            ];
+            let kd = k[0] * x[0] + k[1] * x[1] + k[2] * x[2];
+            *x = [0, 1, 2].map(|i| x[i] * c + kx[i] * s + k[i] * kd * (1.0 - c));
+        }
+    }
+    if let Some(t) = p.translate {
+        if t.iter().any(|v| !v.is_finite()) {
+            return Err(err(
+                format!("{f}.translate"),
+                format!("expected a finite vector, got {t:?}"),
+            ));
+        }
+        for x in mesh.coords.iter_mut() {
+            *x = [0, 1, 2].map(|i| x[i] + t[i]);
+        }
+    }
+    Ok(())
+}
+
 fn part_mesh(m: &MeshDeck, f: &str, part: u32, deck_dir: &Path) -> Result<Mesh> {
     match m {
         MeshDeck::Box {
@@ -1026,18 +1069,45 @@ fn part_mesh(m: &MeshDeck, f: &str, part: u32, deck_dir: &Path) -> Result<Mesh> 
             }
             Ok(mesh)
         }
-        MeshDeck::Gmsh { file } => {
-            let path = if Path::new(file).is_absolute() {
-                Path::new(file).to_path_buf()
-            } else {
-                deck_dir.join(file)
-            };
-            let text = std::fs::read_to_string(&path).map_err(|e| {
+        MeshDeck::Sheet {
+            file,
+            thickness,
+            layers,
+            offset,
+        } => {
+            if !(*thickness > 0.0 && thickness.is_finite()) {
+                return Err(err(
+                    format!("{f}.mesh.thickness"),
+                    format!("expected a positive length, got {thickness}"),
+                ));
+            }
+            if !(1..=64).contains(layers) {
+                return Err(err(
+                    format!("{f}.mesh.layers"),
+                    format!("expected 1 to 64 elements through the thickness, got {layers}"),
+                ));
+            }
+            let (path, text) = read_mesh_file(file, f, deck_dir)?;
+            let in_file = |e: String| {
                 err(
                     format!("{f}.mesh.file"),
-                    format!("cannot read `{}`: {e}", path.display()),
+                    format!("`{}`: {e}", path.display()),
                 )
-            })?;
+            };
+            let surface = gmsh::read_surface(&text).map_err(in_file)?;
+            let spec = crate::mesh::sheet::SheetSpec {
+                thickness: *thickness,
+                layers: *layers,
+                offset: match offset {
+                    SheetOffsetDeck::Middle => crate::mesh::sheet::Offset::Middle,
+                    SheetOffsetDeck::AlongNormal => crate::mesh::sheet::Offset::AlongNormal,
+                    SheetOffsetDeck::AgainstNormal => crate::mesh::sheet::Offset::AgainstNormal,
+                },
+            };
+            crate::mesh::sheet::extrude(&surface, &spec, part).map_err(in_file)
+        }
+        MeshDeck::Gmsh { file } => {
+            let (path, text) = read_mesh_file(file, f, deck_dir)?;
             let mut mesh = gmsh::read_msh(&text, part).map_err(|e| {
                 err(
                     format!("{f}.mesh.file"),
@@ -1054,6 +1124,22 @@ fn part_mesh(m: &MeshDeck, f: &str, part: u32, deck_dir: &Path) -> Result<Mesh> 
             Ok(mesh)
         }
     }
+}
+
+/// A mesh file's path (relative to the deck's directory) and text.
+fn read_mesh_file(file: &str, f: &str, deck_dir: &Path) -> Result<(std::path::PathBuf, String)> {
+    let path = if Path::new(file).is_absolute() {
+        Path::new(file).to_path_buf()
+    } else {
+        deck_dir.join(file)
+    };
+    let text = std::fs::read_to_string(&path).map_err(|e| {
+        err(
+            format!("{f}.mesh.file"),
+            format!("cannot read `{}`: {e}", path.display()),
+        )
+    })?;
+    Ok((path, text))
 }
 
 /// Drop nodes that no element uses (geometry points in Gmsh files): they would carry

@@ -227,6 +227,20 @@ pub struct PartDeck {
     /// Hourglass spring coefficient (F-bar: default 0; reduced: default 1).
     #[serde(default)]
     pub hourglass: Option<f64>,
+    /// Placement of the mesh (an Abaqus instance): rotated about the origin, then
+    /// translated. Groups keep their names; selections by box see the placed part.
+    #[serde(default)]
+    pub rotate: Option<RotateDeck>,
+    #[serde(default)]
+    pub translate: Option<[f64; 3]>,
+}
+
+/// A rotation by `angle` degrees about `axis` through the origin (right-hand rule).
+#[derive(Debug, Clone, Copy, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct RotateDeck {
+    pub axis: [f64; 3],
+    pub angle: f64,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize, Default)]
@@ -315,6 +329,36 @@ pub enum MeshDeck {
     /// A Gmsh MSH 4.1 ASCII file (hex8, tet4; physical groups become groups). A
     /// relative path is taken from the deck's directory.
     Gmsh { file: String },
+    /// A thin wall: a Gmsh MSH 4.1 ASCII surface mesh of quad4 elements extruded by
+    /// `thickness` into `layers` hex8 through it, along the surface's normal (the right-
+    /// hand normal of the first quad in the file; quads are oriented alike). Groups:
+    /// `top`, `bottom` (faces on the normal's side and the other); per physical surface
+    /// S element and node group S and faces `S.top`, `S.bottom`; per physical curve the
+    /// nodes through the thickness and, along the sheet's edge, its edge faces; per
+    /// physical point its nodes through the thickness.
+    Sheet {
+        file: String,
+        thickness: f64,
+        #[serde(default = "one_usize")]
+        layers: usize,
+        /// Where the surface lies: `middle` (default), `along-normal` (the sheet grows
+        /// along the normal from it) or `against-normal`.
+        #[serde(default)]
+        offset: SheetOffsetDeck,
+    },
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize, Default)]
+#[serde(rename_all = "kebab-case")]
+pub enum SheetOffsetDeck {
+    #[default]
+    Middle,
+    AlongNormal,
+    AgainstNormal,
+}
+
+fn one_usize() -> usize {
+    1
 }
 
 /// How much of a generated cylinder: all of it, or the x ≥ 0, y ≥ 0 quadrant.

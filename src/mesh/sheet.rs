@@ -1,0 +1,442 @@
+//! Sheets: a quad4 surface mesh extruded by a thickness into hex8 layers (paper §3.4:
+//! thin walls meshed by their surface, one or two solid elements through the thickness).
+//!
+//! The quads are first oriented alike across shared edges (Gmsh gives each surface
+//! entity its own orientation), starting from each connected piece's first quad in the
+//! file. Each node then moves along its mitred normal: the unit sum of its quads'
+//! normals, scaled by 1 / min(n · n_q) so every face keeps the full thickness at a fold
+//! (a hat section's 90° bends), as an offset curve does.
+
+use std::collections::{BTreeMap, HashMap};
+
+use super::{ElemKind, FaceRef, Mesh};
+
+/// A surface mesh as read (from Gmsh): quads and the physical groups on them.
+#[derive(Debug, Clone, Default)]
+pub struct Surface {
+    pub coords: Vec<[f64; 3]>,
+    pub quads: Vec<[usize; 4]>,
+    /// For messages: the file line and element tag of each quad.
+    pub quad_lines: Vec<(usize, u64)>,
+    /// Physical surfaces: quad indices.
+    pub quad_groups: BTreeMap<String, Vec<usize>>,
+    /// Physical curves: line2 elements (node pairs).
+    pub edge_groups: BTreeMap<String, Vec<[usize; 2]>>,
+    /// Physical points.
+    pub point_groups: BTreeMap<String, Vec<usize>>,
+}
+
+/// Where the surface lies in the sheet, relative to the quads' normal (the right-hand
+/// normal of the first quad of each connected piece, as in the file).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Offset {
+    /// The middle surface (a shell model's surface).
+    #[default]
+    Middle,
+    /// The sheet grows along the normal from the surface.
+    AlongNormal,
+    /// The sheet grows against the normal.
+    AgainstNormal,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SheetSpec {
+    pub thickness: f64,
+    pub layers: usize,
+    pub offset: Offset,
+}
+
+/// Folds sharper than this (angle between neighbouring quads' normals, 120°) would need
+/// an offset of more than twice the thickness: refused.
+const MIN_MITRE_COS: f64 = 0.5;
+
+fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
+fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+fn unit(a: [f64; 3]) -> Option<[f64; 3]> {
+    let n = dot(a, a).sqrt();
+    (n > 0.0 && n.is_finite()).then(|| [a[0] / n, a[1] / n, a[2] / n])
+}
+
+/// Orient every quad like its neighbours across shared edges (breadth first from each
+/// connected piece's first quad). Errors on an edge shared by more than two quads and on
+/// a surface that cannot be oriented (a Möbius strip).
+fn orient(s: &Surface) -> Result<Vec<[usize; 4]>, String> {
+    let name = |q: usize| {
+        let (line, tag) = s.quad_lines.get(q).copied().unwrap_or((0, q as u64));
+        format!("element {tag} (line {line})")
+    };
+    let mut edges: HashMap<(usize, usize), Vec<usize>> = HashMap::new();
+    for (q, quad) in s.quads.iter().enumerate() {
+        for i in 0..4 {
+            let (a, b) = (quad[i], quad[(i + 1) % 4]);
+            edges.entry((a.min(b), a.max(b))).or_default().push(q);
+        }
+    }
+    if let Some((&(a, b), qs)) = edges.iter().filter(|(_, q)| q.len() > 2).min() {
+        return Err(format!(
+            "the edge between nodes at {:?} and {:?} is shared by {} quads ({}, ...); a sheet is a surface where at most two quads meet at an edge",
+            s.coords[a],
+            s.coords[b],
+            qs.len(),
+            name(qs[0])
+        ));
+    }
+    let mut out = s.quads.clone();
+    let mut done = vec![false; out.len()];
+    let mut queue = std::collections::VecDeque::new();
+    for seed in 0..out.len() {
+        if done[seed] {
+            continue;
+        }
+        done[seed] = true;
+        queue.push_back(seed);
+        while let Some(q) = queue.pop_front() {
+            for i in 0..4 {
+                let (a, b) = (out[q][i], out[q][(i + 1) % 4]);
+                for &r in &edges[&(a.min(b), a.max(b))] {
+                    if r == q {
+                        continue;
+                    }
+                    // Alike orientation runs a shared edge the other way round.
+                    let same_way = (0..4).any(|j| out[r][j] == a && out[r][(j + 1) % 4] == b);
+                    if !done[r] {
+                        if same_way {
+                            out[r] = [out[r][0], out[r][3], out[r][2], out[r][1]];
+                        }
+                        done[r] = true;
+                        queue.push_back(r);
+                    } else if same_way {
+                        return Err(format!(
+                            "the surface cannot be oriented (a Möbius strip?): {} and {} disagree across their shared edge",
+                            name(q),
+                            name(r)
+                        ));
+                    }
+                }
+            }
+        }
+    }
+    Ok(out)
+}
+
+/// Extrude the surface into `layers` hex8 elements through the thickness, part `part`.
+///
+/// Groups: `top` and `bottom` (the outer faces on the normal's side and the other);
+/// per physical surface S, element and node group S and face groups `S.top`,
+/// `S.bottom`; per physical curve C, node group C (every node through the thickness)
+/// and, where C runs along the sheet's edge, face group C (the edge faces); per
+/// physical point P, node group P (its column of nodes).
+pub fn extrude(s: &Surface, spec: &SheetSpec, part: u32) -> Result<Mesh, String> {
+    // Only the nodes the quads use.
+    let mut map = vec![usize::MAX; s.coords.len()];
+    let mut coords = Vec::new();
+    for quad in &s.quads {
+        for &n in quad {
+            if map[n] == usize::MAX {
+                map[n] = coords.len();
+                coords.push(s.coords[n]);
+            }
+        }
+    }
+    let quads: Vec<[usize; 4]> = orient(s)?.iter().map(|q| q.map(|n| map[n])).collect();
+    let np = coords.len();
+
+    // Corner normals, summed per node weighted by the corner's angle.
+    let mut sum = vec![[0.0; 3]; np];
+    let mut corner_normals: Vec<Vec<[f64; 3]>> = vec![Vec::new(); np];
+    for (q, quad) in quads.iter().enumerate() {
+        for i in 0..4 {
+            let n = quad[i];
+            let a = sub(coords[quad[(i + 1) % 4]], coords[n]);
+            let b = sub(coords[quad[(i + 3) % 4]], coords[n]);
+            let Some(nrm) = unit(cross(a, b)) else {
+                let (line, tag) = s.quad_lines.get(q).copied().unwrap_or((0, q as u64));
+                return Err(format!(
+                    "element {tag} (line {line}) is degenerate: two of its edges at the node at {:?} are parallel or of zero length",
+                    coords[n]
+                ));
+            };
+            let angle = (dot(a, b) / (dot(a, a) * dot(b, b)).sqrt())
+                .clamp(-1.0, 1.0)
+                .acos();
+            for k in 0..3 {
+                sum[n][k] += angle * nrm[k];
+            }
+            corner_normals[n].push(nrm);
+        }
+    }
+    let mut dir = vec![[0.0; 3]; np];
+    for n in 0..np {
+        let Some(u) = unit(sum[n]) else {
+            return Err(format!(
+                "the quads at the node at {:?} fold back onto each other; no thickness direction",
+                coords[n]
+            ));
+        };
+        let c = corner_normals[n]
+            .iter()
+            .map(|&m| dot(u, m))
+            .fold(f64::INFINITY, f64::min);
+        if c < MIN_MITRE_COS {
+            return Err(format!(
+                "the sheet folds by {:.0}° at the node at {:?}; alfe extrudes folds of at most 120° (refine or round the bend)",
+                2.0 * c.clamp(-1.0, 1.0).acos().to_degrees(),
+                coords[n]
+            ));
+        }
+        dir[n] = u.map(|x| x / c);
+    }
+
+    let t = spec.thickness;
+    let l = spec.layers;
+    let base = match spec.offset {
+        Offset::Middle => -0.5 * t,
+        Offset::AlongNormal => 0.0,
+        Offset::AgainstNormal => -t,
+    };
+    let mut mesh = Mesh {
+        offsets: vec![0],
+        ..Default::default()
+    };
+    for k in 0..=l {
+        let h = base + t * k as f64 / l as f64;
+        for n in 0..np {
+            mesh.coords
+                .push([0, 1, 2].map(|i| coords[n][i] + h * dir[n][i]));
+        }
+    }
+    // Element of quad q, layer k: q * l + k; bottom face 0-1-2-3, normal along -n.
+    let node = |k: usize, n: usize| k * np + n;
+    for quad in &quads {
+        for k in 0..l {
+            let mut nodes = [0; 8];
+            for i in 0..4 {
+                nodes[i] = node(k, quad[i]);
+                nodes[i + 4] = node(k + 1, quad[i]);
+            }
+            mesh.push_elem(ElemKind::Hex8, &nodes, part);
+        }
+    }
+    for e in 0..mesh.n_elems() {
+        if mesh.elem_volume(e) <= 0.0 {
+            let q = e / l;
+            let (line, tag) = s.quad_lines.get(q).copied().unwrap_or((0, q as u64));
+            return Err(format!(
+                "element {tag} (line {line}) extrudes into an inverted hex8: the thickness {t} is too large for the surface's curvature there"
+            ));
+        }
+    }
+
+    let elem = |q: usize, k: usize| q * l + k;
+    let face = |e: usize, f: u8| FaceRef { elem: e, face: f };
+    let column = |n: usize| (0..=l).map(move |k| node(k, n));
+    let nq = quads.len();
+    mesh.face_groups.insert(
+        "bottom".into(),
+        (0..nq).map(|q| face(elem(q, 0), 0)).collect(),
+    );
+    mesh.face_groups.insert(
+        "top".into(),
+        (0..nq).map(|q| face(elem(q, l - 1), 1)).collect(),
+    );
+    for (g, qs) in &s.quad_groups {
+        let mut elems: Vec<usize> = qs
+            .iter()
+            .flat_map(|&q| (0..l).map(move |k| elem(q, k)))
+            .collect();
+        elems.sort_unstable();
+        let mut nodes: Vec<usize> = qs.iter().flat_map(|&q| quads[q]).flat_map(column).collect();
+        nodes.sort_unstable();
+        nodes.dedup();
+        mesh.face_groups.insert(
+            format!("{g}.bottom"),
+            qs.iter().map(|&q| face(elem(q, 0), 0)).collect(),
+        );
+        mesh.face_groups.insert(
+            format!("{g}.top"),
+            qs.iter().map(|&q| face(elem(q, l - 1), 1)).collect(),
+        );
+        mesh.elem_groups.insert(g.clone(), elems);
+        mesh.node_groups.insert(g.clone(), nodes);
+    }
+    // Quad edge i (nodes i, i+1) is hex face 2 + i (see ElemKind::faces).
+    let mut edge_quads: HashMap<(usize, usize), Vec<(usize, u8)>> = HashMap::new();
+    for (q, quad) in quads.iter().enumerate() {
+        for i in 0..4 {
+            let (a, b) = (quad[i], quad[(i + 1) % 4]);
+            edge_quads
+                .entry((a.min(b), a.max(b)))
+                .or_default()
+                .push((q, 2 + i as u8));
+        }
+    }
+    let mapped = |n: usize, what: &str| -> Result<usize, String> {
+        match map.get(n) {
+            Some(&m) if m != usize::MAX => Ok(m),
+            _ => Err(format!(
+                "physical group \"{what}\" has the node at {:?}, which no quad uses",
+                s.coords[n]
+            )),
+        }
+    };
+    for (g, edges) in &s.edge_groups {
+        let mut nodes = Vec::new();
+        let mut faces = Vec::new();
+        for &[a, b] in edges {
+            let (a, b) = (mapped(a, g)?, mapped(b, g)?);
+            nodes.extend(column(a).chain(column(b)));
+            match edge_quads.get(&(a.min(b), a.max(b))).map(Vec::as_slice) {
+                Some(&[(q, f)]) => faces.extend((0..l).map(|k| face(elem(q, k), f))),
+                Some(_) => {}
+                None => {
+                    return Err(format!(
+                        "physical curve \"{g}\" has an edge from {:?} to {:?} that is not an edge of any quad",
+                        coords[a], coords[b]
+                    ))
+                }
+            }
+        }
+        nodes.sort_unstable();
+        nodes.dedup();
+        faces.sort_unstable();
+        faces.dedup();
+        mesh.node_groups.insert(g.clone(), nodes);
+        if !faces.is_empty() {
+            mesh.face_groups.insert(g.clone(), faces);
+        }
+    }
+    for (g, pts) in &s.point_groups {
+        let mut nodes = Vec::new();
+        for &p in pts {
+            nodes.extend(column(mapped(p, g)?));
+        }
+        nodes.sort_unstable();
+        nodes.dedup();
+        mesh.node_groups.insert(g.clone(), nodes);
+    }
+    Ok(mesh)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// An L of two unit quads folded 90° along the y axis: one in the x–y plane
+    /// (x from -1 to 0), one in the y–z plane going up; the second given the other way
+    /// round, as Gmsh may.
+    fn folded() -> Surface {
+        Surface {
+            coords: vec![
+                [-1.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0],
+                [0.0, 1.0, 0.0],
+                [-1.0, 1.0, 0.0],
+                [0.0, 0.0, 1.0],
+                [0.0, 1.0, 1.0],
+            ],
+            quads: vec![[0, 1, 2, 3], [1, 2, 5, 4]],
+            quad_lines: vec![(10, 1), (11, 2)],
+            quad_groups: [("flange".to_string(), vec![0])].into(),
+            edge_groups: [("free".to_string(), vec![[4, 5]])].into(),
+            point_groups: [("tip".to_string(), vec![4])].into(),
+        }
+    }
+
+    #[test]
+    fn orients_and_keeps_the_thickness_at_a_fold() {
+        let spec = SheetSpec {
+            thickness: 0.1,
+            layers: 2,
+            offset: Offset::Middle,
+        };
+        let m = extrude(&folded(), &spec, 4).unwrap();
+        assert_eq!((m.n_nodes(), m.n_elems()), (18, 4));
+        assert_eq!(m.elem_part, vec![4; 4]);
+        // Both flanges: the sheet's volume is area × t where the mitre is exact.
+        let vol: f64 = (0..4).map(|e| m.elem_volume(e)).sum();
+        assert!(vol > 0.0 && (0..4).all(|e| m.elem_volume(e) > 0.0));
+        // Flange 1 normal is +z; the fold node moves along (-1, 0, 1)/√2 × √2 t/2.
+        let fold_top = m.coords[2 * 6 + 1];
+        assert!((fold_top[2] - 0.05).abs() < 1e-12, "{fold_top:?}");
+        assert!((fold_top[0] + 0.05).abs() < 1e-12, "{fold_top:?}");
+        let fold_bottom = m.coords[1];
+        assert!((fold_bottom[2] + 0.05).abs() < 1e-12 && (fold_bottom[0] - 0.05).abs() < 1e-12);
+        // Flat node far from the fold: exactly ±t/2.
+        assert!((m.coords[0][2] + 0.05).abs() < 1e-12 && (m.coords[12][2] - 0.05).abs() < 1e-12);
+        // Volume: the folded strip's inner and outer lengths average to the mid length 2.
+        assert!((vol - 0.2).abs() < 1e-12, "{vol}");
+        assert_eq!(m.face_groups["top"].len(), 2);
+        assert_eq!(
+            m.face_groups["flange.top"],
+            vec![FaceRef { elem: 1, face: 1 }]
+        );
+        assert_eq!(m.elem_groups["flange"], vec![0, 1]);
+        // Surface node 4 is the sixth the quads use.
+        assert_eq!(m.node_groups["tip"], vec![5, 11, 17]);
+        // The free edge of the upright quad: two layers of edge faces, nodes 4, 5 × 3.
+        assert_eq!(m.face_groups["free"].len(), 2);
+        assert_eq!(m.node_groups["free"].len(), 6);
+        for f in &m.face_groups["free"] {
+            let ns = m.face_nodes(*f);
+            assert!(
+                ns.iter().all(|n| m.node_groups["free"].contains(n)),
+                "{ns:?}"
+            );
+        }
+        // Along / against the normal: one face of the sheet is the surface.
+        for (offset, z) in [
+            (Offset::AlongNormal, [0.0, 0.1]),
+            (Offset::AgainstNormal, [-0.1, 0.0]),
+        ] {
+            let m = extrude(&folded(), &SheetSpec { offset, ..spec }, 0).unwrap();
+            assert!(
+                (m.coords[0][2] - z[0]).abs() < 1e-12 && (m.coords[12][2] - z[1]).abs() < 1e-12
+            );
+            assert!((0..4).all(|e| m.elem_volume(e) > 0.0));
+        }
+    }
+
+    #[test]
+    fn refuses_bad_surfaces() {
+        let spec = SheetSpec {
+            thickness: 0.1,
+            layers: 1,
+            offset: Offset::Middle,
+        };
+        // A third quad on the fold edge.
+        let mut s = folded();
+        s.coords.push([1.0, 0.0, 0.0]);
+        s.coords.push([1.0, 1.0, 0.0]);
+        s.quads.push([1, 6, 7, 2]);
+        let e = extrude(&s, &spec, 0).unwrap_err();
+        assert!(e.contains("shared by 3 quads"), "{e}");
+        // A fold back onto itself (180°).
+        let mut s = folded();
+        s.coords[4] = [-1.0, 0.0, 0.0];
+        s.coords[5] = [-1.0, 1.0, 0.0];
+        s.coords[0] = [-1.0, 0.0, 0.1];
+        let e = extrude(&s, &spec, 0).unwrap_err();
+        assert!(e.contains("fold"), "{e}");
+        // Degenerate quad.
+        let mut s = folded();
+        s.coords[3] = s.coords[2];
+        let e = extrude(&s, &spec, 0).unwrap_err();
+        assert!(e.contains("element 1 (line 10) is degenerate"), "{e}");
+        // A curve off the quads.
+        let mut s = folded();
+        s.edge_groups.insert("x".into(), vec![[0, 5]]);
+        let e = extrude(&s, &spec, 0).unwrap_err();
+        assert!(e.contains("physical curve \"x\""), "{e}");
+    }
+}
