@@ -322,8 +322,8 @@ step = 0.25
 /// iteration; the wall's only moves the gap): the wall's first step retried where the
 /// entity's did not, so their step sequences differ from the start, and with them the
 /// return-mapped plastic strains. Measured: at the common step times and at the peak
-/// (50 mm, a curve breakpoint both steps land on) the forces agree within 2.7e-4 of the
-/// peak (the hertz-sphere test shows the exact identity, 1e-8, where nothing depends on
+/// (50 mm, a curve breakpoint both steps land on) the forces agree within 3.1e-4 of the
+/// peak (one EAS hex8 through the sheet, 16 × 16) (the hertz-sphere test shows the exact identity, 1e-8, where nothing depends on
 /// the path). The force rises with the indentation, the indenter leaves the panel on
 /// the way back (zero force at the end), the panel keeps a dent of more than 40 mm, and
 /// nothing penetrates.
@@ -331,8 +331,8 @@ step = 0.25
 fn panel_dent_entity_is_the_wall_and_the_panel_stays_dented() {
     let deck = edit(
         &builtin("panel-dent"),
-        "cells = [3, 30, 30]",
-        "cells = [2, 16, 16]",
+        "cells = [1, 30, 30]",
+        "cells = [1, 16, 16]",
     );
     let ent = run_deck("panel-entity", &deck);
     let wall = run_deck(
@@ -358,7 +358,21 @@ fn panel_dent_entity_is_the_wall_and_the_panel_stays_dented() {
             );
         }
     }
-    assert!(common >= 5, "only {common} common step times");
+    assert!(common >= 4, "only {common} common step times");
+    // Between common times in loading: the wall's force interpolated linearly in time at
+    // every step of the entity (the interpolation's own error is below 1e-2 of the peak
+    // there; unloading falls too steeply between steps for it).
+    for (i, t) in te.iter().enumerate().filter(|(_, t)| **t <= 1.0) {
+        if let Some(j) = tw.windows(2).position(|w| w[0] < *t && *t < w[1]) {
+            let s = (t - tw[j]) / (tw[j + 1] - tw[j]);
+            let f = fw[j] + s * (fw[j + 1] - fw[j]);
+            assert!(
+                (fe[i] - f).abs() < 1e-2 * scale,
+                "t = {t}: indenter.fy entity {} vs wall (interpolated) {f}",
+                fe[i]
+            );
+        }
+    }
     let (t, uy) = (column(&ent, "time"), column(&ent, "indenter.uy"));
     let k1 = t.iter().position(|&x| (x - 1.0).abs() < 1e-9).unwrap();
     assert_eq!(uy[k1], -50.0);

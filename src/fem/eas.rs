@@ -170,7 +170,12 @@ pub fn force(
             hi - lo
         })
         .fold(0.0f64, f64::max);
-    loop {
+    // A local step that inverts a point is halved (up to 8 times); α from the last
+    // converged state that inverts one is dropped for α = 0 (the compatible element).
+    let mut prev: Option<([f64; N_ALPHA], SVector<f64, N_ALPHA>, f64)> = None;
+    let mut halvings = 0;
+    let mut restarted = false;
+    'local: loop {
         let mut ra = SVector::<f64, N_ALPHA>::zeros();
         kaa.fill(0.0);
         let mut scale = 0.0f64;
@@ -181,6 +186,17 @@ pub fn force(
             if finite {
                 let j = fm.determinant();
                 if j.is_nan() || j <= 0.0 {
+                    if let (Some((a0, da, _)), true) = (&prev, halvings < 8) {
+                        halvings += 1;
+                        let s = 0.5f64.powi(halvings);
+                        alpha = std::array::from_fn(|i| a0[i] - s * da[i]);
+                        continue 'local;
+                    }
+                    if prev.is_none() && !restarted && alpha.iter().any(|&a| a != 0.0) {
+                        restarted = true;
+                        alpha = [0.0; N_ALPHA];
+                        continue 'local;
+                    }
                     return Err(ElementError(format!(
                         "det F = {j:.3e} ≤ 0 at Gauss point {g} (element inverted)"
                     )));
@@ -223,6 +239,16 @@ pub fn force(
             kaa = inv;
             break;
         }
+        // A local step that raises the enhanced residual (a point switching between
+        // elastic and plastic across it) is halved too.
+        if let (Some((a0, da, r0)), true) = (&prev, halvings < 8) {
+            if res > *r0 {
+                halvings += 1;
+                let s = 0.5f64.powi(halvings);
+                alpha = std::array::from_fn(|i| a0[i] - s * da[i]);
+                continue 'local;
+            }
+        }
         it += 1;
         if it > MAX_LOCAL {
             return Err(ElementError(format!(
@@ -231,6 +257,8 @@ pub fn force(
             )));
         }
         let da = inv * ra;
+        prev = Some((alpha, da, res));
+        halvings = 0;
         for (a, d) in alpha.iter_mut().zip(da.iter()) {
             *a -= d;
         }

@@ -14,23 +14,45 @@ pub struct BlocksSpec {
     pub solids: Vec<Aabb>,
     pub holes: Vec<Aabb>,
     pub cell_size: f64,
+    /// Finer slabs (axis, [from, to], cell size): spans of that axis within [from, to]
+    /// take the finer size (a lattice refines whole slabs).
+    pub refine: Vec<Slab>,
 }
 
-/// The lattice lines along one axis: the boxes' faces, each span split evenly into
-/// ⌈span / h⌉ cells.
+/// A slab of the lattice with its own cell size.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Slab {
+    pub axis: usize,
+    pub range: [f64; 2],
+    pub cell_size: f64,
+}
+
+/// The lattice lines along one axis: the boxes' faces and the slabs' ends, each span
+/// split evenly into ⌈span / h⌉ cells, h the smallest cell size of the slabs holding it.
 fn lines(spec: &BlocksSpec, axis: usize) -> Vec<f64> {
     let mut cuts: Vec<f64> = spec
         .solids
         .iter()
         .chain(&spec.holes)
         .flat_map(|b| [b[0][axis], b[1][axis]])
+        .chain(
+            spec.refine
+                .iter()
+                .filter(|r| r.axis == axis)
+                .flat_map(|r| r.range),
+        )
         .collect();
     cuts.sort_by(f64::total_cmp);
     let tol = 1e-9 * cuts.iter().fold(0.0f64, |m, x| m.max(x.abs())).max(1.0);
     cuts.dedup_by(|a, b| (*a - *b).abs() <= tol);
     let mut out = vec![cuts[0]];
     for w in cuts.windows(2) {
-        let n = ((w[1] - w[0]) / spec.cell_size - 1e-9).ceil().max(1.0) as usize;
+        let h = spec
+            .refine
+            .iter()
+            .filter(|r| r.axis == axis && r.range[0] <= w[0] + tol && w[1] <= r.range[1] + tol)
+            .fold(spec.cell_size, |h, r| h.min(r.cell_size));
+        let n = ((w[1] - w[0]) / h - 1e-9).ceil().max(1.0) as usize;
         out.extend((1..=n).map(|i| w[0] + (w[1] - w[0]) * i as f64 / n as f64));
     }
     out
@@ -111,6 +133,7 @@ mod tests {
             ],
             holes: vec![[[2.0, 1.0, -1.0], [4.0, 3.0, 3.0]]],
             cell_size: 1.0,
+            refine: vec![],
         };
         let m = blocks_mesh(&spec, 3);
         let vol: f64 = (0..m.n_elems()).map(|e| m.elem_volume(e)).sum();
@@ -144,14 +167,28 @@ mod tests {
 
     #[test]
     fn spans_are_split_no_longer_than_the_cell_size() {
-        let spec = BlocksSpec {
+        let mut spec = BlocksSpec {
             solids: vec![[[0.0, 0.0, 0.0], [3.0, 1.0, 1.0]]],
             holes: vec![],
             cell_size: 0.7,
+            refine: vec![],
         };
         let l = lines(&spec, 0);
         assert_eq!(l.len(), 6);
         assert!(l.windows(2).all(|w| w[1] - w[0] <= 0.7 + 1e-12));
         assert_eq!(lattice_cells(&spec), 5.0 * 2.0 * 2.0);
+        // A slab x in [0, 1] at 0.25: 4 cells there, 3 beyond; y and z as before.
+        spec.refine = vec![Slab {
+            axis: 0,
+            range: [0.0, 1.0],
+            cell_size: 0.25,
+        }];
+        let l = lines(&spec, 0);
+        assert_eq!(l.len(), 8, "{l:?}");
+        assert!((l[4] - 1.0).abs() < 1e-12 && (l[1] - 0.25).abs() < 1e-12);
+        assert!(l[4..]
+            .windows(2)
+            .all(|w| (w[1] - w[0] - 2.0 / 3.0).abs() < 1e-12));
+        assert_eq!(lattice_cells(&spec), 7.0 * 2.0 * 2.0);
     }
 }

@@ -62,8 +62,23 @@ pub(super) fn known(names: &BTreeMap<String, impl Sized>) -> String {
 /// mesh file paths.
 pub fn build(deck: &Deck, deck_dir: &Path) -> Result<Scene> {
     let deck = &super::steps::with_end_time(deck)?;
-    if deck.scene.name.trim().is_empty() {
-        return Err(err("scene.name", "expected a non-empty name"));
+    // The name becomes file names (`<name>.h5`, `<name>.xmf`) in the output directory.
+    let name = &deck.scene.name;
+    if name.is_empty()
+        || name.len() > 64
+        || name.starts_with('.')
+        || !name
+            .chars()
+            .all(|c| c.is_ascii_alphanumeric() || matches!(c, '-' | '_' | '.'))
+    {
+        return Err(err(
+            "scene.name",
+            format!(
+                "expected 1 to 64 letters, digits, '-', '_' or '.' (not first), a file name; got {:?}{}",
+                name.chars().take(80).collect::<String>(),
+                if name.chars().count() > 80 { "..." } else { "" }
+            ),
+        ));
     }
     unique_names("materials", deck.materials.iter().map(|m| m.name.as_str()))?;
     unique_names("parts", deck.parts.iter().map(|m| m.name.as_str()))?;
@@ -1024,6 +1039,7 @@ fn part_mesh(m: &MeshDeck, f: &str, part: u32, deck_dir: &Path) -> Result<Mesh> 
             solids,
             holes,
             cell_size,
+            refine,
         } => {
             if solids.is_empty() {
                 return Err(err(format!("{f}.mesh.solids"), "expected at least one box"));
@@ -1048,10 +1064,35 @@ fn part_mesh(m: &MeshDeck, f: &str, part: u32, deck_dir: &Path) -> Result<Mesh> 
                     format!("expected a positive length, got {cell_size}"),
                 ));
             }
+            for (i, r) in refine.iter().enumerate() {
+                if !(r.from < r.to && r.from.is_finite() && r.to.is_finite()) {
+                    return Err(err(
+                        format!("{f}.mesh.refine[{i}]"),
+                        format!(
+                            "expected finite from < to, got from = {}, to = {}",
+                            r.from, r.to
+                        ),
+                    ));
+                }
+                if !(r.cell_size > 0.0 && r.cell_size.is_finite()) {
+                    return Err(err(
+                        format!("{f}.mesh.refine[{i}].cell_size"),
+                        format!("expected a positive length, got {}", r.cell_size),
+                    ));
+                }
+            }
             let spec = crate::mesh::blocks::BlocksSpec {
                 solids: solids.clone(),
                 holes: holes.clone(),
                 cell_size: *cell_size,
+                refine: refine
+                    .iter()
+                    .map(|r| crate::mesh::blocks::Slab {
+                        axis: r.axis as usize,
+                        range: [r.from, r.to],
+                        cell_size: r.cell_size,
+                    })
+                    .collect(),
             };
             let n = crate::mesh::blocks::lattice_cells(&spec);
             if n > 2e7 {

@@ -325,6 +325,9 @@ pub enum MeshDeck {
         #[serde(default)]
         holes: Vec<[[f64; 3]; 2]>,
         cell_size: f64,
+        /// Finer slabs of the lattice: `{ axis = "x", from, to, cell_size }`.
+        #[serde(default)]
+        refine: Vec<SlabDeck>,
     },
     /// A Gmsh MSH 4.1 ASCII file (hex8, tet4; physical groups become groups). A
     /// relative path is taken from the deck's directory.
@@ -359,6 +362,16 @@ pub enum SheetOffsetDeck {
 
 fn one_usize() -> usize {
     1
+}
+
+/// A slab of a `blocks` lattice, `from` ≤ `axis` ≤ `to`, meshed at its own cell size.
+#[derive(Debug, Clone, Copy, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct SlabDeck {
+    pub axis: Comp,
+    pub from: f64,
+    pub to: f64,
+    pub cell_size: f64,
 }
 
 /// How much of a generated cylinder: all of it, or the x ≥ 0, y ≥ 0 quadrant.
@@ -730,6 +743,140 @@ impl Default for OutputDeck {
 
 /// Parse a deck, naming the field path and line of the first error.
 pub fn parse(text: &str) -> Result<Deck, String> {
+    let deck = parse_fields(text)?;
+    // serde reads a fixed-size array's first n entries and toml does not object to more:
+    // compare every array with what the deck read back.
+    if let (Ok(given), Ok(read)) = (text.parse::<toml::Table>(), toml::Value::try_from(&deck)) {
+        extra_entries(&toml::Value::Table(given), &read, &mut String::new())?;
+    }
+    Ok(deck)
+}
+
+/// The first array in `given` longer than the same array as read (`read`), by path.
+fn extra_entries(given: &toml::Value, read: &toml::Value, path: &mut String) -> Result<(), String> {
+    use toml::Value as V;
+    match (given, read) {
+        (V::Table(g), V::Table(r)) => {
+            for (k, gv) in g {
+                if let Some(rv) = r.get(k) {
+                    let len = path.len();
+                    if !path.is_empty() {
+                        path.push('.');
+                    }
+                    path.push_str(k);
+                    extra_entries(gv, rv, path)?;
+                    path.truncate(len);
+                }
+            }
+        }
+        (V::Array(g), V::Array(r)) => {
+            if g.len() > r.len() {
+                return Err(format!(
+                    "{path}: expected {} entries, got {} ({})",
+                    r.len(),
+                    g.len(),
+                    given
+                ));
+            }
+            for (i, (gv, rv)) in g.iter().zip(r).enumerate() {
+                let len = path.len();
+                path.push_str(&format!("[{i}]"));
+                extra_entries(gv, rv, path)?;
+                path.truncate(len);
+            }
+        }
+        _ => {}
+    }
+    Ok(())
+}
+
+/// The path to the one value under `path` that an error message quotes (an array of
+/// the named length, the unknown variant, the offending number or string), if exactly
+/// one matches.
+fn deeper_path(root: &toml::Value, path: &str, msg: &str) -> Option<String> {
+    use toml::Value as V;
+    let mut node = root;
+    for part in path.split('.').filter(|p| !p.is_empty()) {
+        let (key, idx) = match part.find('[') {
+            Some(i) => (&part[..i], Some(&part[i..])),
+            None => (part, None),
+        };
+        if !key.is_empty() {
+            node = node.as_table()?.get(key)?;
+        }
+        for i in idx
+            .into_iter()
+            .flat_map(|s| s.split(['[', ']']))
+            .filter(|s| !s.is_empty())
+        {
+            node = node.as_array()?.get(i.parse::<usize>().ok()?)?;
+        }
+    }
+    if !node.is_table() {
+        return None;
+    }
+    let quoted = |after: &str| -> Option<String> {
+        let rest = &msg[msg.find(after)? + after.len()..];
+        let rest = rest.trim_start();
+        let (open, close) = match rest.chars().next()? {
+            '`' => ('`', '`'),
+            '"' => ('"', '"'),
+            _ => return None,
+        };
+        let rest = &rest[open.len_utf8()..];
+        Some(rest[..rest.find(close)?].to_string())
+    };
+    let matches: Box<dyn Fn(&V) -> bool> = if let Some(n) = msg
+        .strip_prefix("invalid length ")
+        .and_then(|r| r.split(',').next())
+        .and_then(|n| n.trim().parse::<usize>().ok())
+    {
+        Box::new(move |v: &V| v.as_array().is_some_and(|a| a.len() == n))
+    } else if let Some(name) = quoted("unknown variant") {
+        Box::new(move |v: &V| v.as_str() == Some(name.as_str()))
+    } else if let Some(i) = quoted("integer").and_then(|s| s.parse::<i64>().ok()) {
+        Box::new(move |v: &V| v.as_integer() == Some(i))
+    } else if let Some(x) = quoted("floating point").and_then(|s| s.parse::<f64>().ok()) {
+        Box::new(move |v: &V| v.as_float() == Some(x))
+    } else if let Some(t) = quoted("invalid type: string") {
+        Box::new(move |v: &V| v.as_str() == Some(t.as_str()))
+    } else {
+        return None;
+    };
+    fn find(v: &V, here: &mut String, m: &dyn Fn(&V) -> bool, out: &mut Vec<String>) {
+        if m(v) {
+            out.push(here.clone());
+        }
+        match v {
+            V::Table(t) => {
+                for (k, x) in t {
+                    let len = here.len();
+                    here.push('.');
+                    here.push_str(k);
+                    find(x, here, m, out);
+                    here.truncate(len);
+                }
+            }
+            V::Array(a) => {
+                for (i, x) in a.iter().enumerate() {
+                    let len = here.len();
+                    here.push_str(&format!("[{i}]"));
+                    find(x, here, m, out);
+                    here.truncate(len);
+                }
+            }
+            _ => {}
+        }
+    }
+    let mut out = Vec::new();
+    find(node, &mut String::new(), &*matches, &mut out);
+    match out.as_slice() {
+        [one] if !one.is_empty() => Some(format!("{path}{one}")),
+        _ => None,
+    }
+}
+
+fn parse_fields(text: &str) -> Result<Deck, String> {
     let de = toml::Deserializer::new(text);
     serde_path_to_error::deserialize(de).map_err(|e| {
         let path = e.path().to_string();
@@ -739,6 +886,12 @@ pub fn parse(text: &str) -> Result<Deck, String> {
             .map(|s| text[..s.start.min(text.len())].lines().count().max(1));
         let msg = inner.message().trim().replace('\n', " ");
         let at = line.map(|l| format!(" (line {l})")).unwrap_or_default();
+        // Inside an internally tagged table (`kind = ...`, `type = ...`) serde loses the
+        // key: find the value the message names in that table.
+        let path = match text.parse::<toml::Table>() {
+            Ok(t) => deeper_path(&toml::Value::Table(t), &path, &msg).unwrap_or(path),
+            Err(_) => path,
+        };
         if path.is_empty() || path == "." {
             format!("{msg}{at}")
         } else {

@@ -185,6 +185,14 @@ impl Monitor {
         scale: f64,
         opts: &NonlinearOptions,
     ) -> Verdict {
+        // Overflow (a load of 1e200, a modulus of 1e300) is a failure, never convergence:
+        // an infinite reference force would pass any relative test.
+        if !(ev.rn.is_finite() && ev.f_ref.is_finite() && ev.un.is_finite()) {
+            return Verdict::Fail(format!(
+                "the residual is not finite (|r| = {:.3e}, reference force {:.3e}, |u| = {:.3e}): a load or material constant overflows",
+                ev.rn, ev.f_ref, ev.un
+            ));
+        }
         let small_r = ev.rn <= opts.residual_rtol * ev.f_ref;
         let small_du = it == 0 || self.last_du <= opts.increment_rtol * ev.un;
         // The energy test is relative to the step's largest correction energy; a step
@@ -197,9 +205,6 @@ impl Monitor {
             || self.last_energy <= floor;
         if small_r && small_du && small_e && ev.gap == 0.0 {
             return Verdict::Converged;
-        }
-        if !ev.rn.is_finite() {
-            return Verdict::Fail("the residual is not finite".into());
         }
         // A step driven by prescribed displacements starts from a state whose forces
         // are round-off (a body at rest): its scale also takes the force scale where
@@ -338,8 +343,8 @@ pub fn line_search(
 
 /// Take the correction `du` from `u` (residual `r`, evaluation `ev`): the backtracking line
 /// search if asked for, else the full step, halved while it cannot be evaluated (an
-/// inverted element; always the full step on an iteration that imposes a prescribed
-/// increment), then record it in `monitor`. On return `u` and `r`
+/// inverted element; prescribed values always land in full), then record it in
+/// `monitor`. On return `u` and `r`
 /// hold the new point; `Ok(None)`: it could not be evaluated (reason in `st`).
 #[allow(clippy::too_many_arguments)]
 pub fn take_step(
@@ -364,15 +369,23 @@ pub fn take_step(
         let base = u.to_vec();
         let mut lambda = 1.0;
         loop {
-            for ((x, b), d) in u.iter_mut().zip(&base).zip(du) {
-                *x = b + lambda * d;
+            // On the iteration that imposes a prescribed increment (a moving wall's
+            // reference point, a displacement boundary condition) the prescribed values
+            // land in full; only the free unknowns' part of the step is shortened.
+            for (i, ((x, b), d)) in u.iter_mut().zip(&base).zip(du).enumerate() {
+                let s = if ev.gap > 0.0 && cons.is_c[i] {
+                    1.0
+                } else {
+                    lambda
+                };
+                *x = b + s * d;
             }
             match evaluate(comm, problem, u, r, cons, st)? {
                 Some(e) => break (e, lambda),
                 // A full step that inverts an element (a nearly incompressible body
-                // overshooting) is shortened, not fatal: halve it up to 5 times. Not on
-                // the iteration that imposes a prescribed increment, which must land.
-                None if ev.gap == 0.0 && lambda > 0.05 => lambda *= 0.5,
+                // overshooting, a thin wall folding) is shortened, not fatal: halve it
+                // up to 5 times.
+                None if lambda > 0.05 => lambda *= 0.5,
                 None => return Ok(None),
             }
         }
@@ -437,6 +450,27 @@ mod tests {
             Monitor::default().verdict(&g, 0, 1.0, &o),
             Verdict::Continue
         ));
+    }
+
+    #[test]
+    fn overflow_is_a_failure() {
+        let o = opts();
+        for (rn, f_ref) in [
+            (f64::INFINITY, f64::INFINITY),
+            (f64::NAN, 1.0),
+            (0.0, f64::NAN),
+        ] {
+            let e = Eval {
+                rn,
+                f_ref,
+                gap: 0.0,
+                un: 0.0,
+            };
+            match Monitor::default().verdict(&e, 0, 1.0, &o) {
+                Verdict::Fail(why) => assert!(why.contains("not finite"), "{why}"),
+                _ => panic!("{rn} / {f_ref} must fail"),
+            }
+        }
     }
 
     #[test]

@@ -1,0 +1,137 @@
+//! Runs that must fail cleanly (issue 16): an overflowing load is a failure, never
+//! convergence.
+
+mod common;
+use common::*;
+
+/// A traction of 1e200 on `cantilever` overflows the residual's norm: the run fails and
+/// says so (it used to end with `converged: true`, 0 iterations, u = 0).
+#[test]
+fn overflowing_load_is_not_convergence() {
+    let deck = edit(
+        &builtin("cantilever"),
+        "traction = [0.0, 0.0, -30.0]",
+        "traction = [0.0, 0.0, -1e200]",
+    );
+    match try_run_deck("overflow", &deck) {
+        Ok(out) => {
+            assert!(!out.summary.converged, "an overflowing load converged");
+            let msg = &out.summary.message;
+            assert!(msg.contains("not finite"), "{msg}");
+        }
+        Err(e) => assert!(e.to_string().contains("not finite"), "{e}"),
+    }
+}
+
+/// The scene name becomes file names: one that leaves the output directory, or is too
+/// long for Open MPI's buffers, is refused naming `scene.name`.
+#[test]
+fn scene_names_must_be_file_names() {
+    for bad in [
+        "../escaped",
+        "a/b",
+        "",
+        ".hidden",
+        &"x".repeat(300),
+        "sp ace",
+    ] {
+        let deck = edit(
+            &builtin("cantilever"),
+            "name = \"cantilever\"",
+            &format!("name = \"{bad}\""),
+        );
+        let e = try_run_deck("bad-name", &deck).err().map(|e| e.to_string());
+        assert!(
+            e.as_deref()
+                .is_some_and(|e| e.contains("scene.name: expected 1 to 64")),
+            "{bad:?}: {e:?}"
+        );
+    }
+}
+
+/// Fixed-size arrays with extra entries are refused by path (serde used to read the
+/// first entries and drop the rest).
+#[test]
+fn extra_array_entries_are_refused() {
+    let cases = [
+        (
+            "cantilever",
+            "traction = [0.0, 0.0, -30.0]",
+            "traction = [0.0, 0.0, -30.0, 7]",
+            "loads[0]",
+        ),
+        (
+            "scordelis-lo",
+            "max = [25.0, 16.2, 19.3]",
+            "max = [25.0, 16.2, 19.3, 5]",
+            "node_sets[3].box.max: expected 3 entries, got 4",
+        ),
+        (
+            "rubber-indent",
+            "motion = { translation = [0, 0, -50] }",
+            "motion = { segments = [{ to = 1.0, translation = [0, 0, -50, 7] }] }",
+            "walls[0].motion.segments[0].translation: expected 3 entries, got 4",
+        ),
+    ];
+    for (scene, from, to, want) in cases {
+        let deck = edit(&builtin(scene), from, to);
+        let e = try_run_deck("extra", &deck).err().map(|e| e.to_string());
+        assert!(
+            e.as_deref().is_some_and(|e| e.contains(want)),
+            "{to}: {e:?}"
+        );
+    }
+    // A curve point with a third entry.
+    let deck = edit(
+        &builtin("cantilever"),
+        "[analysis]",
+        "[[curves]]\nname = \"c\"\npoints = [[0, 0], [1, 1, 123]]\n[analysis]",
+    );
+    let e = try_run_deck("extra-curve", &deck)
+        .err()
+        .unwrap()
+        .to_string();
+    assert!(
+        e.contains("curves[0].points[1]: expected 2 entries, got 3"),
+        "{e}"
+    );
+}
+
+/// Errors inside tagged tables (`kind = ...`, `type = ...`) name the key, not only the
+/// table.
+#[test]
+fn errors_in_tagged_tables_name_the_key() {
+    let cases = [
+        (
+            "cells = [40, 4, 4]",
+            "cells = [40, -3, 4]",
+            "parts[0].mesh.cells[1]: invalid value: integer `-3`",
+        ),
+        (
+            "traction = [0.0, 0.0, -30.0]",
+            "traction = [0.0, 0.0, -30.0, 7]",
+            "loads[0].traction: invalid length 4",
+        ),
+    ];
+    for (from, to, want) in cases {
+        let deck = edit(&builtin("cantilever"), from, to);
+        let e = try_run_deck("tagged", &deck).err().map(|e| e.to_string());
+        assert!(
+            e.as_deref().is_some_and(|e| e.contains(want)),
+            "{to}: {e:?}"
+        );
+    }
+    let deck = edit(
+        &builtin("scordelis-lo"),
+        "set = \"crown\"\ncomponents = [\"y\"]",
+        "set = \"crown\"\ncomponents = [\"Y\"]",
+    );
+    let e = try_run_deck("tagged-variant", &deck)
+        .err()
+        .unwrap()
+        .to_string();
+    assert!(
+        e.contains("boundary[2].components[0]: unknown variant `Y`"),
+        "{e}"
+    );
+}
