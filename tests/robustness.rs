@@ -135,3 +135,44 @@ fn errors_in_tagged_tables_name_the_key() {
         "{e}"
     );
 }
+
+/// Absurd sizes are refused with the numbers before anything is allocated (they used to
+/// panic with `capacity overflow` or ask for 8–192 GB).
+#[test]
+fn absurd_sizes_are_refused_before_allocating() {
+    let cases = [
+        (
+            "cells = [40, 4, 4]",
+            "cells = [3, 4611686018427387904, 3]",
+            "parts[0].mesh.cells: makes 4.151e19 elements; expected at most 2e7",
+        ),
+        (
+            "cells = [40, 4, 4]",
+            "cells = [2000, 2000, 2000]",
+            "parts[0].mesh.cells: makes 8.000e9 elements",
+        ),
+        (
+            "step = 0.1",
+            "step = 1e-300",
+            "analysis.step: 1e-300 makes 1.000e300 steps",
+        ),
+        (
+            "step = 0.1",
+            "step = 1e-9",
+            "analysis.step: 1e-9 makes 1.000e9 steps",
+        ),
+        (
+            "end_time = 1.0",
+            "end_time = 1e9",
+            "analysis.step: 1e-1 makes 1.000e10 steps",
+        ),
+    ];
+    for (from, to, want) in cases {
+        let deck = edit(&builtin("cantilever"), from, to);
+        let e = try_run_deck("sizes", &deck).err().map(|e| e.to_string());
+        assert!(
+            e.as_deref().is_some_and(|e| e.contains(want)),
+            "{to}: {e:?}"
+        );
+    }
+}

@@ -847,6 +847,20 @@ fn run_settings(deck: &Deck, timeline: &super::steps::Timeline) -> RunSettings {
     }
 }
 
+/// The most elements a generated part may have (2e7: tens of GB before solving).
+const MAX_ELEMENTS: f64 = 2e7;
+
+/// Refuse a generated mesh of more than [`MAX_ELEMENTS`] before allocating it.
+fn size_guard(field: &str, elements: f64) -> Result<()> {
+    if elements > MAX_ELEMENTS {
+        return Err(err(
+            field,
+            format!("makes {elements:.3e} elements; expected at most {MAX_ELEMENTS:.0e}"),
+        ));
+    }
+    Ok(())
+}
+
 /// Rotate (Rodrigues) and translate a part's mesh as its deck says.
 fn place(mesh: &mut Mesh, p: &PartDeck, f: &str) -> Result<()> {
     if let Some(r) = &p.rotate {
@@ -911,6 +925,10 @@ fn part_mesh(m: &MeshDeck, f: &str, part: u32, deck_dir: &Path) -> Result<Mesh> 
                     format!("expected three counts ≥ 1, got {cells:?}"),
                 ));
             }
+            size_guard(
+                &format!("{f}.mesh.cells"),
+                cells.iter().map(|&c| c as f64).product(),
+            )?;
             if grading.iter().any(|&g| !(g > 0.0 && g.is_finite())) {
                 return Err(err(
                     format!("{f}.mesh.grading"),
@@ -959,6 +977,10 @@ fn part_mesh(m: &MeshDeck, f: &str, part: u32, deck_dir: &Path) -> Result<Mesh> 
                     format!("expected three counts ≥ 1, got {cells:?}"),
                 ));
             }
+            size_guard(
+                &format!("{f}.mesh.cells"),
+                cells.iter().map(|&c| c as f64).product(),
+            )?;
             // Convex and counter-clockwise: every corner turns left.
             for i in 0..4 {
                 let (a, b, c) = (corners[i], corners[(i + 1) % 4], corners[(i + 2) % 4]);
@@ -1011,6 +1033,13 @@ fn part_mesh(m: &MeshDeck, f: &str, part: u32, deck_dir: &Path) -> Result<Mesh> 
             };
             spec.check()
                 .map_err(|(field, why)| err(format!("{f}.mesh.{field}"), why))?;
+            // The butterfly section has about 3 cells_radial² cells.
+            let section = 3.0 * (*cells_radial as f64).powi(2);
+            size_guard(&format!("{f}.mesh.cells_radial"), section)?;
+            size_guard(
+                &format!("{f}.mesh.cells_axial"),
+                section * *cells_axial as f64,
+            )?;
             Ok(cylinder_mesh(&spec, part))
         }
         MeshDeck::Ring {
@@ -1033,6 +1062,10 @@ fn part_mesh(m: &MeshDeck, f: &str, part: u32, deck_dir: &Path) -> Result<Mesh> 
             };
             spec.check()
                 .map_err(|(field, why)| err(format!("{f}.mesh.{field}"), why))?;
+            size_guard(
+                &format!("{f}.mesh.cells"),
+                cells.iter().map(|&c| c as f64).product(),
+            )?;
             Ok(ring_mesh(&spec, part))
         }
         MeshDeck::Blocks {
@@ -1095,10 +1128,10 @@ fn part_mesh(m: &MeshDeck, f: &str, part: u32, deck_dir: &Path) -> Result<Mesh> 
                     .collect(),
             };
             let n = crate::mesh::blocks::lattice_cells(&spec);
-            if n > 2e7 {
+            if n > MAX_ELEMENTS {
                 return Err(err(
                     format!("{f}.mesh.cell_size"),
-                    format!("{cell_size} makes a lattice of {n:.3e} cells; expected at most 2e7"),
+                    format!("{cell_size} makes a lattice of {n:.3e} cells; expected at most {MAX_ELEMENTS:.0e}"),
                 ));
             }
             let mesh = crate::mesh::blocks::blocks_mesh(&spec, part);

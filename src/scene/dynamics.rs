@@ -14,6 +14,10 @@ fn kind_name(k: AnalysisKind) -> &'static str {
 }
 
 /// `[analysis]` and the output keys that depend on it.
+/// The most steps a deck may ask for at its nominal step (10 million: weeks of solving,
+/// and the step list alone would take gigabytes beyond it).
+pub const MAX_STEPS: f64 = 1e7;
+
 pub fn check_analysis(deck: &Deck) -> Result<()> {
     let a = &deck.analysis;
     let kind = kind_name(a.kind);
@@ -37,6 +41,17 @@ pub fn check_analysis(deck: &Deck) -> Result<()> {
             format!(
                 "expected 0 < step ≤ end_time ({}), got {}",
                 a.end_time, a.step
+            ),
+        ));
+    }
+    if step_given && a.end_time / a.step > MAX_STEPS {
+        return Err(err(
+            "analysis.step",
+            format!(
+                "{:e} makes {:.3e} steps of end_time {:e}; expected at most {MAX_STEPS:.0e}",
+                a.step,
+                a.end_time / a.step,
+                a.end_time
             ),
         ));
     }

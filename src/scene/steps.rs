@@ -96,6 +96,17 @@ pub fn stages(deck: &Deck) -> Result<Vec<Stage>> {
                 }
             }
         }
+        if s.duration / step > super::dynamics::MAX_STEPS {
+            return Err(err(
+                format!("{f}.step"),
+                format!(
+                    "{step:e} makes {:.3e} increments of the step's duration {:e}; expected at most {:.0e}",
+                    s.duration / step,
+                    s.duration,
+                    super::dynamics::MAX_STEPS
+                ),
+            ));
+        }
         if s.output_every == Some(0) {
             return Err(err(format!("{f}.output_every"), "expected at least 1"));
         }
