@@ -297,6 +297,8 @@ pub fn run(comm: &dyn Comm, opts: &RunOptions) -> Result<RunOutcome> {
         .out
         .clone()
         .unwrap_or_else(|| PathBuf::from("out").join(&scene));
+    // One run per output directory (rank 0 holds the lock until the run ends).
+    let _lock = on_rank0(comm, || crate::output::lock::OutLock::acquire(&out))?;
     let analysis = &settings.analysis;
     let mut writer = ResultsWriter::create(
         comm,

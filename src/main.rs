@@ -241,8 +241,17 @@ fn main_inner(comm: &dyn Comm, raw: &[String]) -> Result<()> {
     }
 }
 
+extern "C" {
+    fn signal(signum: i32, handler: usize) -> usize;
+}
+
 fn main() {
     faer::set_global_parallelism(faer::Par::Seq);
+    // A file-size limit (`ulimit -f`) is a full disk to the writer: a write error, not
+    // SIGXFSZ (25 on Linux) killing one rank. SIG_IGN is 1.
+    unsafe {
+        signal(25, 1);
+    }
     let Some(universe) = mpi::initialize() else {
         eprintln!("alfe: error: MPI could not be initialised");
         std::process::exit(1);
@@ -266,6 +275,14 @@ fn main() {
             e.exit_code()
         }
     };
+    // An output file left open after a failed collective write (a full disk) cannot be
+    // closed safely: end every rank now, with the run's exit code, instead of letting
+    // MPI_Finalize make HDF5 close it and wait. The steps flushed before stay readable.
+    if alfe::output::h5::LEFT_OPEN.load(std::sync::atomic::Ordering::SeqCst) {
+        unsafe {
+            mpi::ffi::MPI_Abort(mpi::ffi::RSMPI_COMM_WORLD, code);
+        }
+    }
     drop(comm);
     drop(universe);
     std::process::exit(code);

@@ -176,3 +176,43 @@ fn absurd_sizes_are_refused_before_allocating() {
         );
     }
 }
+
+/// A busy output directory is refused: a second run into it says which run holds it
+/// (two runs into one `--out` used to both exit 0 with one run's results lost).
+#[test]
+fn a_busy_output_directory_is_refused() {
+    let dir = temp_dir("busy");
+    let deck = dir.join("deck.toml");
+    std::fs::write(&deck, builtin("cantilever")).unwrap();
+    let out = dir.join("out");
+    std::fs::create_dir_all(&out).unwrap();
+    // This test's own process holds it (alive, this host).
+    let host = std::fs::read_to_string("/proc/sys/kernel/hostname").unwrap();
+    std::fs::write(
+        out.join(".alfe-lock"),
+        format!("{} {}\n", std::process::id(), host.trim()),
+    )
+    .unwrap();
+    let opts = alfe::app::RunOptions {
+        contact: None,
+        target: deck.display().to_string(),
+        out: Some(out.clone()),
+        partitions: dir.join("partitions"),
+        repartition: false,
+        quiet: true,
+        solver: None,
+    };
+    let e = alfe::app::run(&alfe::parallel::SerialComm, &opts)
+        .err()
+        .map(|e| e.to_string());
+    assert!(
+        e.as_deref()
+            .is_some_and(|e| e.contains("another alfe run (pid") && e.contains("--out")),
+        "{e:?}"
+    );
+    assert!(!out.join("history.csv").exists(), "nothing written");
+    // Once the lock is gone, the run goes through and leaves no lock behind.
+    std::fs::remove_file(out.join(".alfe-lock")).unwrap();
+    alfe::app::run(&alfe::parallel::SerialComm, &opts).unwrap();
+    assert!(out.join("history.csv").exists() && !out.join(".alfe-lock").exists());
+}

@@ -164,7 +164,16 @@ pub struct H5File {
     path: PathBuf,
     /// Dataset writes that HDF5 reports it did not do collectively (MPI runs only).
     not_collective: Cell<u64>,
+    /// A collective operation failed: HDF5's ranks may no longer agree on the file's
+    /// metadata, and a parallel H5Fclose can then wait for ever (measured on a full
+    /// disk: one rank in a metadata-flush barrier, the other in the truncate's
+    /// broadcast). Such a file is not closed; what the last flush wrote stays readable.
+    poisoned: Cell<bool>,
 }
+
+/// Set when a parallel file was left open after a failed write: the process must end
+/// with `MPI_Abort`, since `MPI_Finalize` would make HDF5 close it (and wait).
+pub static LEFT_OPEN: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
 
 fn cstring(what: &str, s: &str) -> Result<CString> {
     CString::new(s).map_err(|_| Error::runtime(format!("HDF5: {what} {s:?} contains a NUL byte")))
@@ -264,6 +273,7 @@ impl H5File {
                 comm: dup,
                 path: path.to_path_buf(),
                 not_collective: Cell::new(0),
+                poisoned: Cell::new(false),
             };
             std::mem::forget(file);
             std::mem::forget(lcpl);
@@ -309,6 +319,50 @@ impl H5File {
         }
     }
 
+    /// Every rank learns whether a collective operation failed on any rank (a full disk
+    /// may fail one rank's part only): all return the error together, so none goes on
+    /// to the next collective call and waits there for ever.
+    fn agreed(&self, what: &str, r: Result<()>) -> Result<()> {
+        let ok = self.agree(r.is_ok());
+        if !ok {
+            self.poisoned.set(true);
+        }
+        match (r, ok) {
+            (Err(e), _) => Err(e),
+            (Ok(()), false) => Err(Error::runtime(format!(
+                "HDF5 {}: {what} failed on another rank",
+                self.path.display()
+            ))),
+            (Ok(()), true) => Ok(()),
+        }
+    }
+
+    /// Collective: create a group and any missing parents (e.g. "/steps/000003").
+    /// A group that already exists is not an error.
+    pub fn create_group(&self, path: &str) -> Result<()> {
+        let r = self.create_group_here(path);
+        self.agreed(&format!("group '{path}'"), r)
+    }
+
+    /// Collective: a scalar f64 attribute `name` on object `obj` ("/" for the file's
+    /// root, a group or a dataset path), replacing any existing one. Same value on all ranks.
+    pub fn write_attr_f64(&self, obj: &str, name: &str, v: f64) -> Result<()> {
+        let r = self.write_attr_f64_here(obj, name, v);
+        self.agreed(&format!("attribute '{name}' on '{obj}'"), r)
+    }
+
+    /// Collective: a scalar string attribute (fixed-length, UTF-8, NUL-terminated).
+    pub fn write_attr_str(&self, obj: &str, name: &str, v: &str) -> Result<()> {
+        let r = self.write_attr_str_here(obj, name, v);
+        self.agreed(&format!("attribute '{name}' on '{obj}'"), r)
+    }
+
+    /// Collective flush of everything written so far to disk (survives a later failure).
+    pub fn flush(&self) -> Result<()> {
+        let r = self.flush_here();
+        self.agreed("H5Fflush", r)
+    }
+
     /// How many dataset writes on this rank HDF5 reports it did *not* do as one
     /// collective MPI-IO operation (always 0 for a serial file). A check for tests and
     /// logs: a type conversion or a chunked layout could make HDF5 fall back silently.
@@ -318,7 +372,7 @@ impl H5File {
 
     /// Collective: create a group and any missing parents (e.g. "/steps/000003").
     /// A group that already exists is not an error.
-    pub fn create_group(&self, path: &str) -> Result<()> {
+    fn create_group_here(&self, path: &str) -> Result<()> {
         let _g = hdf5_sys::LOCK.lock();
         let cpath = cstring("group path", path)?;
         if self.link_exists(path)? {
@@ -404,6 +458,18 @@ impl H5File {
     }
 
     fn write_rows<T: H5Elem>(
+        &self,
+        path: &str,
+        n_rows: u64,
+        n_cols: u64,
+        row0: u64,
+        data: &[T],
+    ) -> Result<()> {
+        let r = self.write_rows_here(path, n_rows, n_cols, row0, data);
+        self.agreed(&format!("dataset '{path}'"), r)
+    }
+
+    fn write_rows_here<T: H5Elem>(
         &self,
         path: &str,
         n_rows: u64,
@@ -590,7 +656,7 @@ impl H5File {
 
     /// Collective: a scalar f64 attribute `name` on object `obj` ("/" for the file's
     /// root, a group or a dataset path), replacing any existing one. Same value on all ranks.
-    pub fn write_attr_f64(&self, obj: &str, name: &str, v: f64) -> Result<()> {
+    fn write_attr_f64_here(&self, obj: &str, name: &str, v: f64) -> Result<()> {
         let _g = hdf5_sys::LOCK.lock();
         self.write_attr(
             obj,
@@ -602,7 +668,7 @@ impl H5File {
     }
 
     /// Collective: a scalar string attribute (fixed-length, UTF-8, NUL-terminated).
-    pub fn write_attr_str(&self, obj: &str, name: &str, v: &str) -> Result<()> {
+    fn write_attr_str_here(&self, obj: &str, name: &str, v: &str) -> Result<()> {
         let _g = hdf5_sys::LOCK.lock();
         let cv = cstring("attribute value", v)?;
         let bytes = cv.as_bytes_with_nul();
@@ -632,7 +698,7 @@ impl H5File {
     }
 
     /// Collective flush of everything written so far to disk (survives a later failure).
-    pub fn flush(&self) -> Result<()> {
+    fn flush_here(&self) -> Result<()> {
         let _g = hdf5_sys::LOCK.lock();
         if unsafe { H5Fflush(self.file, H5F_scope_t::H5F_SCOPE_GLOBAL) } < 0 {
             return Err(self.err("H5Fflush".to_string()));
@@ -649,6 +715,10 @@ impl Drop for H5File {
                 H5Pclose(self.dxpl);
             }
             H5Pclose(self.lcpl);
+            if self.poisoned.get() && self.comm.is_some() {
+                LEFT_OPEN.store(true, std::sync::atomic::Ordering::SeqCst);
+                return;
+            }
             if H5Fclose(self.file) < 0 {
                 // Drop cannot return an error; say it once, on one line.
                 eprintln!(

@@ -2,6 +2,7 @@
 //! XDMF3 description beside it that ParaView opens as a time series ([`xdmf`]).
 
 pub mod h5;
+pub mod lock;
 pub mod results;
 pub mod xdmf;
 
