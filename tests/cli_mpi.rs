@@ -1490,7 +1490,7 @@ fn full_disk_stops_every_rank_with_the_written_steps_readable() {
     if std::fs::read_to_string("/proc/self/status")
         .unwrap_or_default()
         .lines()
-        .any(|l| l.starts_with("Uid:") && !l.split_whitespace().nth(1).is_some_and(|u| u == "0"))
+        .any(|l| l.starts_with("Uid:") && l.split_whitespace().nth(1).is_none_or(|u| u != "0"))
     {
         eprintln!("full_disk_...: not root, cannot mount a tmpfs; not checked");
         return;
