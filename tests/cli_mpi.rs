@@ -1557,3 +1557,43 @@ fn full_disk_stops_every_rank_with_the_written_steps_readable() {
         assert!(n < 10, "tmpfs {size}: {n} steps");
     }
 }
+
+/// A partition file is read with a size limit: a link to /dev/zero (which grew a read
+/// to 24 GB) and an oversized file are refused with exit 2 on every rank.
+#[test]
+fn partition_files_are_read_with_a_size_limit() {
+    let dir = temp_dir("part-limit");
+    let parts = dir.join("parts");
+    std::fs::create_dir_all(&parts).unwrap();
+    let file = parts.join("cantilever.2.part");
+    std::os::unix::fs::symlink("/dev/zero", &file).unwrap();
+    let args = [
+        "run",
+        "cantilever",
+        "--quiet",
+        "--out",
+        "o",
+        "--partitions",
+        "parts",
+    ];
+    let o = alfe(&dir, 2, &args);
+    let (_, se) = text(&o);
+    assert_eq!(o.status.code(), Some(2), "{se}");
+    assert!(
+        se.contains("cannot read partition file") && se.contains("not a regular file"),
+        "{se}"
+    );
+    std::fs::remove_file(&file).unwrap();
+    std::fs::write(
+        &file,
+        "alfe-partition 1\n".to_string() + &"0\n".repeat(200_000),
+    )
+    .unwrap();
+    let o = alfe(&dir, 2, &args);
+    let (_, se) = text(&o);
+    assert_eq!(o.status.code(), Some(2), "{se}");
+    assert!(
+        se.contains("larger than a partition of 640 elements"),
+        "{se}"
+    );
+}

@@ -216,3 +216,86 @@ fn a_busy_output_directory_is_refused() {
     alfe::app::run(&alfe::parallel::SerialComm, &opts).unwrap();
     assert!(out.join("history.csv").exists() && !out.join(".alfe-lock").exists());
 }
+
+/// A Gmsh physical surface inside the volume (between two hexes) is refused as a
+/// loaded surface: a traction there acted on one side only (1 N applied instead of 4).
+#[test]
+fn interior_surface_groups_are_refused() {
+    let id = |i: usize, j: usize, k: usize| 1 + i + 3 * (j + 2 * k);
+    let mut s = String::from("$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$PhysicalNames\n2\n2 1 \"mid\"\n3 2 \"solid\"\n$EndPhysicalNames\n");
+    s += "$Entities\n0 0 1 1\n1 1 0 0 1 1 1 1 1 0\n1 0 0 0 2 1 1 1 2 0\n$EndEntities\n";
+    s += "$Nodes\n1 12 1 12\n3 1 0 12\n";
+    for n in 1..=12 {
+        s += &format!("{n}\n");
+    }
+    for k in 0..2 {
+        for j in 0..2 {
+            for i in 0..3 {
+                s += &format!("{i} {j} {k}\n");
+            }
+        }
+    }
+    s += "$EndNodes\n$Elements\n2 3 1 3\n";
+    s += &format!(
+        "2 1 3 1\n1 {} {} {} {}\n",
+        id(1, 0, 0),
+        id(1, 1, 0),
+        id(1, 1, 1),
+        id(1, 0, 1)
+    );
+    s += "3 1 5 2\n";
+    for (t, i) in [(2, 0), (3, 1)] {
+        let c = [
+            (0, 0, 0),
+            (1, 0, 0),
+            (1, 1, 0),
+            (0, 1, 0),
+            (0, 0, 1),
+            (1, 0, 1),
+            (1, 1, 1),
+            (0, 1, 1),
+        ];
+        let ns: Vec<String> = c
+            .iter()
+            .map(|&(a, b, d)| id(i + a, b, d).to_string())
+            .collect();
+        s += &format!("{t} {}\n", ns.join(" "));
+    }
+    s += "$EndElements\n";
+    let dir = temp_dir("interior-msh");
+    let file = dir.join("two.msh");
+    std::fs::write(&file, s).unwrap();
+    let deck = format!(
+        r#"
+[scene]
+name = "interior"
+units = "mm-t-s"
+[[materials]]
+name = "m"
+model = "linear-elastic"
+E = 1000.0
+nu = 0.3
+[[parts]]
+name = "p"
+material = "m"
+mesh = {{ kind = "gmsh", file = "{}" }}
+[[surfaces]]
+name = "mid"
+group = "mid"
+[[loads]]
+type = "traction"
+surface = "mid"
+traction = [1, 0, 0]
+[analysis]
+type = "static"
+end_time = 1.0
+step = 1.0
+"#,
+        file.display()
+    );
+    let e = try_run_deck("interior", &deck).err().unwrap().to_string();
+    assert!(
+        e.contains("surfaces[0].group: surface `mid`: 1 of its 1 faces are inside the volume"),
+        "{e}"
+    );
+}

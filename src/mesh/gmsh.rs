@@ -321,7 +321,11 @@ fn parse(text: &str) -> Result<Raw, String> {
             "Elements" => {
                 seen_elems = true;
                 let blocks = lx.count("the number of element blocks")?;
-                lx.skip(3, "the element count and min and max element tags")?;
+                let header_line = lx.line;
+                let total = lx.count("the number of elements")?;
+                lx.skip(2, "the min and max element tags")?;
+                let first = raw.elems.len();
+                let mut tags: std::collections::HashSet<u64> = std::collections::HashSet::new();
                 for _ in 0..blocks {
                     lx.count("an entity dimension")?;
                     let entity = lx.int("an entity tag")?;
@@ -343,6 +347,11 @@ fn parse(text: &str) -> Result<Raw, String> {
                         let (t, line) = lx.tok("an element tag")?;
                         let etag: u64 =
                             t.parse().map_err(|_| format!("line {line}: expected an element tag (a positive integer), found \"{t}\""))?;
+                        if !tags.insert(etag) {
+                            return Err(format!(
+                                "line {line}: element tag {etag} appears twice in $Elements"
+                            ));
+                        }
                         let at = raw.conn.len();
                         for _ in 0..nn {
                             let (t, l) = lx.tok("a node tag")?;
@@ -368,6 +377,12 @@ fn parse(text: &str) -> Result<Raw, String> {
                             at,
                         });
                     }
+                }
+                if raw.elems.len() - first != total {
+                    return Err(format!(
+                        "line {header_line}: $Elements says {total} elements, its blocks hold {}",
+                        raw.elems.len() - first
+                    ));
                 }
             }
             _ => {
@@ -716,6 +731,21 @@ $EndElements
 
     #[test]
     fn refuses_other_formats() {
+        let e = err(&HEXES.replace("$Elements\n3 5 1 5", "$Elements\n3 4000000000000 1 5"));
+        assert!(
+            e.contains("4000000000000 is larger than the file could hold"),
+            "{e}"
+        );
+        let e = err(&HEXES.replace("$Elements\n3 5 1 5", "$Elements\n3 6 1 5"));
+        assert!(
+            e.contains("$Elements says 6 elements, its blocks hold 5"),
+            "{e}"
+        );
+        let e = err(&HEXES.replace("5 13 16 25 22 31 34 43 40", "4 13 16 25 22 31 34 43 40"));
+        assert!(
+            e.contains("element tag 4 appears twice in $Elements"),
+            "{e}"
+        );
         let e = err(&HEXES.replace("4.1 0 8", "2.2 0 8"));
         assert!(
             e.contains("line 2: MSH version 2.2 is not supported"),

@@ -48,12 +48,34 @@ pub fn write(file: &Path, req: &Request, ranks: usize, part: &[u32]) -> Result<(
 /// Read a partition file, refusing one made for another mesh or rank count.
 pub fn read(file: &Path, req: &Request, ranks: usize) -> Result<Vec<u32>> {
     let mesh = req.mesh;
-    let text = std::fs::read_to_string(file).map_err(|e| {
+    // At most a header and one rank id (≤ 10 digits and a newline) per element: a file
+    // that is larger, or not a regular file (a link to /dev/zero), is not read whole.
+    let limit = 256 + 11 * mesh.n_elems() as u64;
+    let cannot = |e: String| {
         Error::input(format!(
             "cannot read partition file `{}`: {e}",
             file.display()
         ))
-    })?;
+    };
+    let meta = std::fs::metadata(file).map_err(|e| cannot(e.to_string()))?;
+    if !meta.is_file() {
+        return Err(cannot("not a regular file".into()));
+    }
+    let mut text = String::new();
+    std::io::Read::read_to_string(
+        &mut std::io::Read::take(
+            std::fs::File::open(file).map_err(|e| cannot(e.to_string()))?,
+            limit + 1,
+        ),
+        &mut text,
+    )
+    .map_err(|e| cannot(e.to_string()))?;
+    if text.len() as u64 > limit {
+        return Err(cannot(format!(
+            "larger than a partition of {} elements can be ({limit} bytes); delete it or rerun with --repartition",
+            mesh.n_elems()
+        )));
+    }
     let bad = |why: String| {
         Error::input(format!(
             "partition file `{}` {why}; delete it or rerun with --repartition (or `alfe partition ... --ranks {ranks}`)",

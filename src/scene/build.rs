@@ -255,6 +255,27 @@ pub fn build(deck: &Deck, deck_dir: &Path) -> Result<Scene> {
                 format!("surface `{}` selects no boundary faces", s.name),
             ));
         }
+        // A group's faces may lie inside the volume (a Gmsh surface between two
+        // volumes): a load or contact there would act on one side only.
+        let inner: Vec<&FaceRef> = faces
+            .iter()
+            .filter(|fr| boundary.binary_search(fr).is_err())
+            .collect();
+        if let Some(first) = inner.first() {
+            let ns = mesh.face_nodes(**first);
+            let c = ns.iter().fold([0.0; 3], |a, &n| {
+                [0, 1, 2].map(|k| a[k] + mesh.coords[n][k] / ns.len() as f64)
+            });
+            return Err(err(
+                format!("{f}.group"),
+                format!(
+                    "surface `{}`: {} of its {} faces are inside the volume (shared by two elements; one at {c:.4?}); a surface for loads and contact is made of boundary faces",
+                    s.name,
+                    inner.len(),
+                    faces.len()
+                ),
+            ));
+        }
         surfaces.insert(s.name.clone(), faces);
     }
 
