@@ -299,3 +299,34 @@ step = 1.0
         "{e}"
     );
 }
+
+/// A non-finite origin names `origin` (it was reported as an inverted element); a binary
+/// .msh says it is binary (it was "stream did not contain valid UTF-8").
+#[test]
+fn non_finite_origins_and_binary_meshes_name_the_field() {
+    let deck = edit(
+        &builtin("cantilever"),
+        "origin = [0, 0, 0]",
+        "origin = [0, 0, -inf]",
+    );
+    let e = try_run_deck("inf-origin", &deck).err().unwrap().to_string();
+    assert!(
+        e.contains("parts[0].mesh.origin: expected three finite coordinates"),
+        "{e}"
+    );
+    let dir = temp_dir("binary-msh-file");
+    let file = dir.join("b.msh");
+    let mut bytes = b"$MeshFormat\n4.1 1 8\n".to_vec();
+    bytes.extend_from_slice(&[1, 0, 0, 0, 0xff, 0xfe, 0x80]);
+    std::fs::write(&file, bytes).unwrap();
+    let deck = edit(
+        &builtin("cantilever"),
+        r#"mesh = { kind = "box", origin = [0, 0, 0], size = [10, 1, 1], cells = [40, 4, 4] }"#,
+        &format!(r#"mesh = {{ kind = "gmsh", file = "{}" }}"#, file.display()),
+    );
+    let e = try_run_deck("binary-msh", &deck).err().unwrap().to_string();
+    assert!(
+        e.contains("parts[0].mesh.file") && e.contains("is a binary .msh file"),
+        "{e}"
+    );
+}

@@ -934,6 +934,12 @@ fn part_mesh(m: &MeshDeck, f: &str, part: u32, deck_dir: &Path) -> Result<Mesh> 
             element,
             distort,
         } => {
+            if origin.iter().any(|o| !o.is_finite()) {
+                return Err(err(
+                    format!("{f}.mesh.origin"),
+                    format!("expected three finite coordinates, got {origin:?}"),
+                ));
+            }
             if size.iter().any(|&s| !(s > 0.0 && s.is_finite())) {
                 return Err(err(
                     format!("{f}.mesh.size"),
@@ -1228,11 +1234,19 @@ fn read_mesh_file(file: &str, f: &str, deck_dir: &Path) -> Result<(std::path::Pa
     } else {
         deck_dir.join(file)
     };
-    let text = std::fs::read_to_string(&path).map_err(|e| {
+    let bytes = std::fs::read(&path).map_err(|e| {
         err(
             format!("{f}.mesh.file"),
             format!("cannot read `{}`: {e}", path.display()),
         )
+    })?;
+    let text = String::from_utf8(bytes).map_err(|e| {
+        let why = if e.as_bytes().starts_with(b"$MeshFormat") {
+            "is a binary .msh file; alfe reads ASCII MSH 4.1 (gmsh -format msh41 -bin 0, Mesh.Binary = 0)"
+        } else {
+            "is not a text file (expected an ASCII Gmsh MSH 4.1 file)"
+        };
+        err(format!("{f}.mesh.file"), format!("`{}` {why}", path.display()))
     })?;
     Ok((path, text))
 }
