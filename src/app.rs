@@ -730,7 +730,7 @@ pub fn partition(target: &str, ranks: usize, dir: &std::path::Path) -> Result<St
     let edges = def.coupling_edges();
     let req = def.partition_request(&edges);
     let part = req.compute(ranks)?;
-    let file = cache::path(dir, &run.name, ranks);
+    let file = cache::path(dir, &run.name, ranks, &req);
     cache::write(&file, &req, ranks, &part)?;
     Ok(format!(
         "wrote {}\n{}",

@@ -625,63 +625,50 @@ fn bad_input_gets_one_clear_line_and_exit_code_2() {
     assert!(se.contains("inverted") || se.contains("negative"), "{se}");
 }
 
-/// A partition file made for another mesh is refused, not used; --repartition replaces it.
+/// The partition cache is keyed by the mesh: editing a deck's cells and rerunning on 2
+/// ranks just works (it used to stop on a "stale" file); a file whose header does not
+/// match its mesh is refused, and --repartition replaces it.
 #[test]
-fn stale_partition_file_is_refused() {
+fn partition_cache_is_keyed_by_the_mesh() {
     let dir = temp_dir("stale");
     let deck = builtin("cantilever");
     std::fs::write(dir.join("a.toml"), &deck).unwrap();
-    ok(alfe(
-        &dir,
-        2,
-        &[
-            "run",
-            "a.toml",
-            "--out",
-            "o",
-            "--partitions",
-            "parts",
-            "--quiet",
-        ],
-    ));
+    let run = [
+        "run",
+        "a.toml",
+        "--out",
+        "o",
+        "--partitions",
+        "parts",
+        "--quiet",
+    ];
+    ok(alfe(&dir, 2, &run));
     std::fs::write(
         dir.join("a.toml"),
         edit(&deck, "cells = [40, 4, 4]", "cells = [40, 4, 2]"),
     )
     .unwrap();
-    let o = alfe(
-        &dir,
-        2,
-        &[
-            "run",
-            "a.toml",
-            "--out",
-            "o",
-            "--partitions",
-            "parts",
-            "--quiet",
-        ],
-    );
+    ok(alfe(&dir, 2, &run));
+    let files: Vec<_> = std::fs::read_dir(dir.join("parts"))
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .collect();
+    assert_eq!(files.len(), 2, "one file per mesh: {files:?}");
+    // A file whose header does not match its mesh (both files swapped).
+    let (a, b) = (&files[0], &files[1]);
+    let (ta, tb) = (std::fs::read(a).unwrap(), std::fs::read(b).unwrap());
+    std::fs::write(a, &tb).unwrap();
+    std::fs::write(b, &ta).unwrap();
+    let o = alfe(&dir, 2, &run);
     let (_, se) = text(&o);
     assert_eq!(o.status.code(), Some(2), "{se}");
     assert!(
         se.contains("is stale") && se.contains("--repartition"),
         "{se}"
     );
-    ok(alfe(
-        &dir,
-        2,
-        &[
-            "run",
-            "a.toml",
-            "--out",
-            "o",
-            "--partitions",
-            "parts",
-            "--quiet",
-            "--repartition",
-        ],
-    ));
+    let mut again = run.to_vec();
+    again.push("--repartition");
+    ok(alfe(&dir, 2, &again));
     // `alfe partition` writes the file the run then uses.
     let p = ok(alfe(
         &dir,
@@ -696,7 +683,11 @@ fn stale_partition_file_is_refused() {
         ],
     ));
     assert!(p.contains("edge cut"), "{p}");
-    assert!(dir.join("p2/cantilever.2.part").exists());
+    let written = p.lines().next().unwrap().strip_prefix("wrote ").unwrap();
+    assert!(
+        dir.join(written).exists() && written.contains("p2/cantilever.2."),
+        "{p}"
+    );
 }
 
 /// A run that cannot converge (a cube pushed to beyond zero length: no solution exists
@@ -1563,9 +1554,20 @@ fn full_disk_stops_every_rank_with_the_written_steps_readable() {
 #[test]
 fn partition_files_are_read_with_a_size_limit() {
     let dir = temp_dir("part-limit");
-    let parts = dir.join("parts");
-    std::fs::create_dir_all(&parts).unwrap();
-    let file = parts.join("cantilever.2.part");
+    let p = ok(alfe(
+        &dir,
+        1,
+        &[
+            "partition",
+            "cantilever",
+            "--ranks",
+            "2",
+            "--partitions",
+            "parts",
+        ],
+    ));
+    let file = dir.join(p.lines().next().unwrap().strip_prefix("wrote ").unwrap());
+    std::fs::remove_file(&file).unwrap();
     std::os::unix::fs::symlink("/dev/zero", &file).unwrap();
     let args = [
         "run",

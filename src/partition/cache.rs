@@ -1,13 +1,14 @@
-//! The partition cache: `DIR/<scene>.<ranks>.part`, a small text file whose header
-//! records the hash of the mesh (with its couplings and the partition method), so a file
-//! made for another mesh is refused, never used.
+//! The partition cache: `DIR/<scene>.<ranks>.<key>.part`, a small text file; `key` is the
+//! hash of the mesh (with its couplings and the partition method), so editing a deck's
+//! mesh, or two decks copied from one scene, never meet another mesh's file. The header
+//! records the hash too: a file that does not match (edited by hand) is refused.
 
 use super::Request;
 use crate::{Error, Result};
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
-pub fn path(dir: &Path, scene: &str, ranks: usize) -> PathBuf {
+pub fn path(dir: &Path, scene: &str, ranks: usize, req: &Request) -> PathBuf {
     let safe: String = scene
         .chars()
         .map(|c| {
@@ -18,7 +19,7 @@ pub fn path(dir: &Path, scene: &str, ranks: usize) -> PathBuf {
             }
         })
         .collect();
-    dir.join(format!("{safe}.{ranks}.part"))
+    dir.join(format!("{safe}.{ranks}.{:016x}.part", req.key()))
 }
 
 /// Write a partition file (creating `dir`).
@@ -140,7 +141,7 @@ pub fn get(
     ranks: usize,
     repartition: bool,
 ) -> Result<(Vec<u32>, Origin, PathBuf)> {
-    let file = path(dir, scene, ranks);
+    let file = path(dir, scene, ranks, req);
     if ranks <= 1 {
         return Ok((vec![0; req.mesh.n_elems()], Origin::Trivial, file));
     }
