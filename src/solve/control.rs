@@ -83,7 +83,7 @@ impl StepControl {
         if self.t_done >= self.end * (1.0 - 1e-12) {
             return None;
         }
-        let mut t = self.snap(self.t_done + self.dt);
+        let mut t = self.t_done + self.dt;
         if t > self.end * (1.0 - 1e-9) || self.end - t < 1e-3 * self.dt {
             t = self.end;
         }
@@ -95,21 +95,6 @@ impl StepControl {
             }
         }
         Some((self.t_done, t))
-    }
-
-    /// A time on the grid of 1e-12 of the end time's decade: sums of steps carry
-    /// round-off (0.1 + 0.1 + 0.1 = 0.30000000000000004), and times are read by people
-    /// (history, ParaView) and matched against curve points. Steps are at least 1e-7 of
-    /// the end time (`scene::dynamics::MAX_STEPS`) and cut to 1e-3 of that at most, so
-    /// the grid is finer than any step.
-    fn snap(&self, t: f64) -> f64 {
-        let scale = 10f64.powi(12 - self.end.abs().max(f64::MIN_POSITIVE).log10().floor() as i32);
-        let s = (t * scale).round() / scale;
-        if s.is_finite() {
-            s
-        } else {
-            t
-        }
     }
 
     /// The attempt ending at `t1` failed because of `reason`: halve the step, or, below
@@ -176,18 +161,6 @@ mod tests {
             stops: Vec::new(),
             stages: Vec::new(),
         }
-    }
-
-    #[test]
-    fn step_times_do_not_drift() {
-        let mut c = StepControl::new(&analysis(0.1, 0.01, 0.1), 20);
-        let mut times = Vec::new();
-        while let Some((_, t)) = c.next() {
-            c.accept(t, 10);
-            times.push(t);
-        }
-        let want: Vec<f64> = (1..=10).map(|i| i as f64 / 10.0).collect();
-        assert_eq!(times, want);
     }
 
     #[test]
