@@ -413,9 +413,9 @@ fn parse(text: &str) -> Result<Raw, String> {
 
 /// Read an ASCII Gmsh MSH 4.1 volume mesh; volume elements get part index `part`.
 pub fn read_msh(text: &str, part: u32) -> Result<Mesh, String> {
-    let raw = parse(text)?;
+    let mut raw = parse(text)?;
     let mut mesh = Mesh {
-        coords: raw.coords.clone(),
+        coords: std::mem::take(&mut raw.coords),
         offsets: vec![0],
         ..Default::default()
     };
@@ -513,7 +513,7 @@ pub fn read_msh(text: &str, part: u32) -> Result<Mesh, String> {
 /// Read an ASCII Gmsh MSH 4.1 surface mesh of quad4 elements (a sheet's middle or outer
 /// surface) with its physical surfaces, curves and points, for [`super::sheet`].
 pub fn read_surface(text: &str) -> Result<Surface, String> {
-    let raw = parse(text)?;
+    let mut raw = parse(text)?;
     if let Some(v) = raw.elems.iter().find(|e| e.dim == 3) {
         return Err(format!(
             "line {}: element {} is a volume element; a sheet is read from a surface mesh of quad4 elements (read volume meshes with kind = \"gmsh\")",
@@ -527,7 +527,7 @@ pub fn read_surface(text: &str) -> Result<Surface, String> {
         ));
     }
     let mut s = Surface {
-        coords: raw.coords.clone(),
+        coords: std::mem::take(&mut raw.coords),
         ..Default::default()
     };
     for re in &raw.elems {
