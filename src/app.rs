@@ -606,20 +606,44 @@ fn describe(def: &ModelDef, run: &RunSettings) -> String {
         .iter()
         .map(|c| c.kind().extra_unknowns())
         .sum();
-    let unknowns = if extra > 0 {
-        format!(
-            "{} ({} node displacements, {extra} multipliers and reference-point DOFs)",
-            3 * m.n_nodes() + extra,
-            3 * m.n_nodes()
-        )
-    } else {
+    // A hybrid hex8's pressure takes a block of three unknowns (one used).
+    let hybrid = (0..m.n_elems())
+        .filter(|&e| {
+            m.kinds[e] == crate::mesh::ElemKind::Hex8
+                && def.part_formulation[m.elem_part[e] as usize].is_hybrid()
+        })
+        .count();
+    let mut parts_of = Vec::new();
+    if extra > 0 {
+        parts_of.push(format!("{extra} multipliers and reference-point DOFs"));
+    }
+    if hybrid > 0 {
+        parts_of.push(format!(
+            "{} element pressure blocks ({hybrid} pressures)",
+            3 * hybrid
+        ));
+    }
+    let unknowns = if parts_of.is_empty() {
         format!("{} (3 per node)", 3 * m.n_nodes())
+    } else {
+        format!(
+            "{} ({} node displacements, {})",
+            3 * m.n_nodes() + extra + 3 * hybrid,
+            3 * m.n_nodes(),
+            parts_of.join(", ")
+        )
     };
+    let parts: Vec<String> = def
+        .part_names
+        .iter()
+        .zip(&def.part_formulation)
+        .map(|(n, f)| format!("{n} ({})", f.describe()))
+        .collect();
     let mut s = format!(
         "scene {}: valid\n  units: {}\n  parts: {}\n  nodes: {}\n  elements: {} ({})\n  unknowns: {unknowns}\n  supports: {}\n  node sets: {}\n  surfaces: {}\n  steps: {}\n",
         run.name,
         run.units.describe(),
-        def.part_names.join(", "),
+        parts.join(", "),
         m.n_nodes(),
         m.n_elems(),
         kinds.join(", "),

@@ -68,6 +68,12 @@ pub enum Formulation {
     /// Enhanced assumed strains, Q1/E9 ([`super::eas`]): bends with one element through
     /// a thin wall.
     Eas,
+    /// F-bar with its pressure as an unknown, one per element ([`super::hybrid`], as
+    /// Abaqus' C3D8H): the same answers, and Newton converges on nearly incompressible
+    /// solids as on compressible ones. Without its pressure unknown (here) it is F-bar.
+    Hybrid {
+        hourglass: f64,
+    },
 }
 
 impl Formulation {
@@ -76,8 +82,33 @@ impl Formulation {
     /// The reduced element with its reference hourglass stiffness.
     pub const REDUCED: Formulation = Formulation::Reduced { hourglass: 1.0 };
 
+    /// F-bar kinematics: F-bar itself, and the hybrid element (F-bar with its pressure
+    /// as an unknown; without the unknown, as here, it is F-bar).
     fn is_fbar(self) -> bool {
-        matches!(self, Formulation::FBar { .. })
+        matches!(self, Formulation::FBar { .. } | Formulation::Hybrid { .. })
+    }
+
+    /// A short description for `alfe check`: how hex8 elements of the part behave.
+    pub fn describe(self) -> String {
+        let hg = |h: f64| {
+            if h > 0.0 {
+                format!(", hourglass {h}")
+            } else {
+                String::new()
+            }
+        };
+        match self {
+            Formulation::Standard => "standard hex8".into(),
+            Formulation::FBar { hourglass } => format!("F-bar hex8{}", hg(hourglass)),
+            Formulation::Reduced { hourglass } => format!("reduced hex8, hourglass {hourglass}"),
+            Formulation::Eas => "EAS hex8".into(),
+            Formulation::Hybrid { hourglass } => format!("hybrid hex8{}", hg(hourglass)),
+        }
+    }
+
+    /// Whether the element carries a pressure unknown (a block of its own).
+    pub fn is_hybrid(self) -> bool {
+        matches!(self, Formulation::Hybrid { .. })
     }
 }
 
@@ -157,7 +188,9 @@ pub fn element_force(
                     k.as_deref_mut(),
                 )?;
                 match form {
-                    Formulation::FBar { hourglass } if hourglass > 0.0 => {
+                    Formulation::FBar { hourglass } | Formulation::Hybrid { hourglass }
+                        if hourglass > 0.0 =>
+                    {
                         super::reduced::add_hourglass(
                             nodes(x0),
                             nodes(u),
@@ -457,13 +490,13 @@ pub(super) fn add_tangent<const N: usize>(
 }
 
 /// Kinematics at one point.
-struct PointKinematics<const N: usize> {
+pub(super) struct PointKinematics<const N: usize> {
     /// The F handed to the material (F̄ under F-bar).
-    f: Matrix3<f64>,
+    pub(super) f: Matrix3<f64>,
     /// Gradients the B matrix uses: ∇_x N (finite) or ∇_X N (small).
-    grad: [[f64; 3]; N],
+    pub(super) grad: [[f64; 3]; N],
     /// Reference volume weight w det J₀.
-    w: f64,
+    pub(super) w: f64,
 }
 
 /// The kinematics of every point of one element, with F replaced by F̄ under F-bar.
@@ -472,7 +505,7 @@ struct PointKinematics<const N: usize> {
 /// needs.
 #[inline(always)]
 #[allow(clippy::type_complexity)]
-fn element_kinematics<const N: usize, const G: usize>(
+pub(super) fn element_kinematics<const N: usize, const G: usize>(
     tab: &Tabulated<3, N, G>,
     fbar: bool,
     kin: Kinematics,
@@ -608,7 +641,7 @@ fn force_kernel<const N: usize, const G: usize>(
 /// (finite: linearizing τ̄ = τ(F̄) along δF̄ F̄⁻¹ = δl + δθ I gives c:I δθ and the
 /// Lie-derivative terms 2τ̄ δθ) or M = C:I (small strain).
 #[inline]
-fn add_fbar_tangent<const N: usize>(
+pub(super) fn add_fbar_tangent<const N: usize>(
     g: &[[f64; 3]; N],
     gbar: &[[f64; 3]; N],
     sp: &StressPoint,

@@ -3,6 +3,7 @@
 
 pub mod eas;
 pub mod element;
+pub mod hybrid;
 pub mod mass;
 pub mod reduced;
 pub mod shape;

@@ -48,7 +48,7 @@ pub const REGULARIZATION: f64 = 1e-6;
 
 /// The most neighbours an attached block row may have (a multiplier of a node tracked
 /// by a rigid body: the node and the body's translation and rotation blocks).
-const MAX_NEIGHBOURS: usize = 4;
+const MAX_NEIGHBOURS: usize = 8;
 
 /// One attached block row `m`: its diagonal entry and its neighbours
 /// (`nbrs[nb.clone()]`), whose mutual entries are the fill of its elimination.

@@ -273,6 +273,14 @@ impl Material for J2Plasticity {
         state.get(6).copied()
     }
 
+    /// Hencky's volumetric part τ_vol = K ln J I (plastic flow is isochoric, so J_e = J):
+    /// U = K/2 (ln J)², U' = K ln J / J, U'' = K (1 − ln J) / J².
+    fn volumetric(&self, j: f64) -> Option<(f64, f64)> {
+        let k = self.k();
+        let l = j.ln();
+        Some((k * l / j, k * (1.0 - l) / (j * j)))
+    }
+
     fn shear_modulus(&self) -> f64 {
         self.g()
     }

@@ -71,6 +71,13 @@ pub trait Material: Send + Sync + std::fmt::Debug {
     ) -> Result<[f64; 6], MaterialError> {
         Ok(self.evaluate(f, state_old, state_new)?.stress)
     }
+    /// The volumetric part of an energy that splits as W = W₁(F) + U(J), for the hybrid
+    /// element ([`crate::fem::hybrid`]): U'(J) (the Cauchy pressure it makes, τ_vol =
+    /// J U'(J) I) and U''(J). `None` for a model without that split (the small-strain
+    /// ones). W₁ need not be isochoric: the split only has to carry the bulk modulus.
+    fn volumetric(&self, _j: f64) -> Option<(f64, f64)> {
+        None
+    }
     /// Small-strain shear modulus: scales penalty and ALM stiffnesses.
     fn shear_modulus(&self) -> f64;
     /// Small-strain bulk modulus.

@@ -136,6 +136,12 @@ impl Material for MooneyRivlin {
         Ok(self.update(f, false)?.stress)
     }
 
+    /// U = K/2 (J − 1)²: U' = K (J − 1), U'' = K.
+    fn volumetric(&self, j: f64) -> Option<(f64, f64)> {
+        let k = self.k();
+        Some((k * (j - 1.0), k))
+    }
+
     fn shear_modulus(&self) -> f64 {
         self.g()
     }

@@ -67,6 +67,14 @@ impl Material for NeoHookean {
         Ok(StressPoint { stress, tangent })
     }
 
+    /// U = λ/2 (ln J)²: U' = λ ln J / J, U'' = λ (1 − ln J) / J² (the rest,
+    /// μ/2 (I₁ − 3) − μ ln J, carries only the shear modulus).
+    fn volumetric(&self, j: f64) -> Option<(f64, f64)> {
+        let lambda = lame(self.e, self.nu).0;
+        let l = j.ln();
+        Some((lambda * l / j, lambda * (1.0 - l) / (j * j)))
+    }
+
     fn shear_modulus(&self) -> f64 {
         lame(self.e, self.nu).1
     }

@@ -70,6 +70,22 @@ impl MaterialDef {
         }
     }
 
+    /// Whether the model's energy has a volumetric part U(J) the hybrid element can take
+    /// over (the finite-strain models).
+    pub fn has_volumetric_split(&self) -> bool {
+        !matches!(self, MaterialDef::LinearElastic { .. })
+    }
+
+    /// Whether hex8 should be hybrid by default (static and implicit analyses): a nearly
+    /// incompressible hyperelastic solid (ν ≥ 0.45).
+    pub fn wants_hybrid(&self) -> bool {
+        self.nu() >= 0.45
+            && matches!(
+                self,
+                MaterialDef::MooneyRivlin { .. } | MaterialDef::NeoHookean { .. }
+            )
+    }
+
     /// Whether hex8 should use F-bar by default: nearly incompressible (ν ≥ 0.45) or
     /// plastic (isochoric flow locks a fully integrated hex8 just the same).
     pub fn wants_fbar(&self) -> bool {

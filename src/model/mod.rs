@@ -145,6 +145,7 @@ impl Model {
             columns: Vec::new(),
             column_map: Vec::new(),
         };
+        model.solids.bind(&model.dofs, 0);
         for (i, c) in model.contributions.iter_mut().enumerate() {
             c.bind(&model.dofs, i + 1);
         }
@@ -223,17 +224,10 @@ impl Model {
         let mut k = self.new_matrix(comm);
         k.zero();
         let u0 = vec![0.0; self.dofs.n_local_dofs()];
-        let old = self.solids.state_new.clone();
-        let _ = self.solids.evaluate(&mut Evaluation {
-            t: 0.0,
-            coords: &self.mesh.coords,
-            dofs: &self.dofs,
-            u: &u0,
-            forces: None,
-            jacobian: Some(&mut k),
-            frozen: false,
-        });
-        self.solids.state_new = old;
+        // Hybrid elements condensed: their bulk stiffness is in the pressure block, and
+        // the contact scales need it on the nodes as F-bar has it.
+        self.solids
+            .assemble_condensed_tangent(&self.mesh.coords, &self.dofs, &u0, &mut k);
         k.finish_assembly(comm);
         let start = self.dofs.blocks.start();
         let mut k_diag = vec![0.0; n_local];

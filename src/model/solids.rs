@@ -8,8 +8,13 @@ use super::contribution::{
 };
 use super::def::MaterialDef;
 use super::distribute::LocalElements;
-use crate::fem::element::{element_force, element_stress, n_gauss, state_len, von_mises};
+use super::dofs::{DofMap, Unknowns};
+use crate::fem::element::{
+    element_force, element_stress, n_gauss, state_len, von_mises, Formulation,
+};
+use crate::fem::hybrid;
 use crate::material::Material;
+use crate::mesh::ElemKind;
 
 pub struct Solids {
     pub elements: LocalElements,
@@ -25,6 +30,10 @@ pub struct Solids {
     pub evaluations: u64,
     /// Parts whose largest element von Mises stress is a column `<part>.max_von_mises`.
     pub peak_stress_parts: Vec<(String, u32)>,
+    /// Per element, its pressure block among the hybrid elements (`u32::MAX`: none).
+    hybrid_index: Vec<u32>,
+    /// Local block of the first hybrid element's pressure block (set by `bind`).
+    hybrid_first: usize,
 }
 
 impl Solids {
@@ -41,6 +50,17 @@ impl Solids {
             );
         }
         state_offset.push(s);
+        let mut n_hybrid = 0u32;
+        let hybrid_index = (0..elements.len())
+            .map(|e| {
+                if has_pressure(elements.kinds[e], elements.formulation[e]) {
+                    n_hybrid += 1;
+                    n_hybrid - 1
+                } else {
+                    u32::MAX
+                }
+            })
+            .collect();
         Self {
             elements,
             materials: built,
@@ -50,6 +70,60 @@ impl Solids {
             state_new: vec![0.0; s],
             evaluations: 0,
             peak_stress_parts: Vec::new(),
+            hybrid_index,
+            hybrid_first: 0,
+        }
+    }
+
+    /// Element e's pressure block (local), if it is a hybrid element.
+    fn pressure_block(&self, e: usize) -> Option<usize> {
+        let i = self.hybrid_index[e];
+        (i != u32::MAX).then(|| self.hybrid_first + i as usize)
+    }
+
+    /// How many local elements carry a pressure unknown.
+    pub fn n_hybrid(&self) -> usize {
+        self.hybrid_index.iter().filter(|&&i| i != u32::MAX).count()
+    }
+
+    /// The displacement-only tangent at `u_local`, hybrid elements as F-bar (their
+    /// pressure condensed, p = U'(J̄)): the reference stiffness whose diagonal scales
+    /// contact, with the bulk stiffness on the nodes where contact needs it.
+    pub fn assemble_condensed_tangent(
+        &self,
+        coords: &[[f64; 3]],
+        dofs: &DofMap,
+        u_local: &[f64],
+        k: &mut crate::linalg::DistMatrix,
+    ) {
+        let mut x0 = [[0.0; 3]; 8];
+        let mut ue = [[0.0; 3]; 8];
+        let mut fe = [0.0; 24];
+        let mut ke = vec![0.0; 576];
+        let mut blocks = [0usize; 8];
+        let mut scratch = Vec::new();
+        for e in 0..self.len() {
+            let n = self.gather(e, coords, u_local, &mut x0, &mut ue);
+            let mat = self.materials[self.elements.material[e] as usize].as_ref();
+            let (s0, s1) = (self.state_offset[e], self.state_offset[e + 1]);
+            scratch.resize(s1 - s0, 0.0);
+            let ok = element_force(
+                self.elements.kinds[e],
+                self.elements.formulation[e],
+                &x0[..n],
+                &ue[..n],
+                mat,
+                &self.state_old[s0..s1],
+                &mut scratch,
+                &mut fe[..3 * n],
+                Some(&mut ke[..9 * n * n]),
+            );
+            if ok.is_ok() {
+                for (a, &node) in self.elements.nodes(e).iter().enumerate() {
+                    blocks[a] = dofs.global_block(node);
+                }
+                k.add_element(&blocks[..n], &ke[..9 * n * n]);
+            }
         }
     }
 
@@ -126,6 +200,16 @@ impl Solids {
         (0..self.len())
             .map(|e| {
                 let n = self.gather(e, coords, u_local, &mut x0, &mut ue);
+                if let Some(pb) = self.pressure_block(e) {
+                    return hybrid::stress(
+                        &x0,
+                        &ue,
+                        u_local[3 * pb],
+                        self.material(e),
+                        self.history(e),
+                    )
+                    .unwrap_or([f64::NAN; 6]);
+                }
                 element_stress(
                     self.elements.kinds[e],
                     self.elements.formulation[e],
@@ -150,17 +234,43 @@ impl Solids {
     }
 }
 
+/// Whether an element of this kind and formulation carries a pressure unknown (a hybrid
+/// hex8; the formulation leaves tet4 alone).
+fn has_pressure(kind: ElemKind, form: Formulation) -> bool {
+    kind == ElemKind::Hex8 && form.is_hybrid()
+}
+
 impl Contribution for Solids {
     fn name(&self) -> &str {
         "solids"
     }
 
-    fn pattern(&self, dofs: &super::dofs::DofMap, out: &mut Vec<(usize, usize)>) {
+    /// One pressure block per hybrid element, owned with the element.
+    fn unknowns(&self) -> Unknowns {
+        Unknowns {
+            owned: self.n_hybrid(),
+            ..Unknowns::default()
+        }
+    }
+
+    fn bind(&mut self, dofs: &DofMap, index: usize) {
+        self.hybrid_first = dofs.placed(index).owned_local;
+    }
+
+    fn pattern(&self, dofs: &DofMap, out: &mut Vec<(usize, usize)>) {
         for e in 0..self.len() {
             let nodes = self.elements.nodes(e);
             for &a in nodes {
                 for &b in nodes {
                     out.push((dofs.global_block(a), dofs.global_block(b)));
+                }
+            }
+            if let Some(p) = self.pressure_block(e) {
+                let gp = dofs.global_block(p);
+                out.push((gp, gp));
+                for &a in nodes {
+                    out.push((gp, dofs.global_block(a)));
+                    out.push((dofs.global_block(a), gp));
                 }
             }
         }
@@ -173,14 +283,63 @@ impl Contribution for Solids {
         let mut failure: Option<String> = None;
         let mut x0 = [[0.0; 3]; 8];
         let mut ue = [[0.0; 3]; 8];
-        let mut fe = [0.0; 24];
+        let mut fe = [0.0; hybrid::DOFS];
         let want_k = ev.jacobian.is_some();
-        let mut ke = vec![0.0; if want_k { 576 } else { 0 }];
-        let mut blocks = [0usize; 8];
+        let mut ke = vec![
+            0.0;
+            if want_k {
+                hybrid::DOFS * hybrid::DOFS
+            } else {
+                0
+            }
+        ];
+        let mut blocks = [0usize; 9];
         for e in 0..self.len() {
             let n = self.gather(e, ev.coords, ev.u, &mut x0, &mut ue);
             let mat = self.materials[self.elements.material[e] as usize].as_ref();
             let (s0, s1) = (self.state_offset[e], self.state_offset[e + 1]);
+            if let Some(pb) = self.pressure_block(e) {
+                let Formulation::Hybrid { hourglass } = self.elements.formulation[e] else {
+                    unreachable!("a pressure block belongs to a hybrid element")
+                };
+                let pi = [ev.u[3 * pb], ev.u[3 * pb + 1], ev.u[3 * pb + 2]];
+                let res = hybrid::force(
+                    &x0,
+                    &ue,
+                    &pi,
+                    mat,
+                    hourglass,
+                    &self.state_old[s0..s1],
+                    &mut self.state_new[s0..s1],
+                    &mut fe,
+                    if want_k { Some(&mut ke[..]) } else { None },
+                );
+                if let Err(err) = res {
+                    failure.get_or_insert_with(|| {
+                        format!("element {}: {}", self.elements.orig[e], err.0)
+                    });
+                    continue;
+                }
+                let nodes = self.elements.nodes(e);
+                if let Some((f, _)) = ev.forces.as_mut() {
+                    for (a, &node) in nodes.iter().enumerate() {
+                        for c in 0..3 {
+                            f[3 * node + c] += fe[3 * a + c];
+                        }
+                    }
+                    for c in 0..3 {
+                        f[3 * pb + c] += fe[24 + c];
+                    }
+                }
+                if let Some(k) = ev.jacobian.as_deref_mut() {
+                    for (a, &node) in nodes.iter().enumerate() {
+                        blocks[a] = ev.dofs.global_block(node);
+                    }
+                    blocks[8] = ev.dofs.global_block(pb);
+                    k.add_element(&blocks, &ke);
+                }
+                continue;
+            }
             let res = element_force(
                 self.elements.kinds[e],
                 self.elements.formulation[e],
@@ -225,6 +384,15 @@ impl Contribution for Solids {
 
     fn commit(&mut self) {
         self.state_old.copy_from_slice(&self.state_new);
+    }
+
+    /// Pressure unknowns are algebraic: an explicit step cannot solve for them (the deck
+    /// refuses the combination; this is the backstop).
+    fn start_explicit(&mut self) -> Result<(), String> {
+        if self.n_hybrid() > 0 {
+            return Err("hybrid elements need a static or implicit analysis".into());
+        }
+        Ok(())
     }
 
     fn columns(&self) -> Vec<Column> {

@@ -200,8 +200,9 @@ pub enum HardeningDeck {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize, Default)]
 #[serde(rename_all = "kebab-case")]
 pub enum FormulationDeck {
-    /// F-bar where the material is nearly incompressible (ν ≥ 0.45) or plastic
-    /// (isochoric flow), standard otherwise.
+    /// Hybrid where the material is nearly incompressible (ν ≥ 0.45) and hyperelastic
+    /// in a static or implicit analysis; F-bar there in explicit runs and for plastic
+    /// parts (isochoric flow); standard otherwise.
     #[default]
     Auto,
     /// Full integration of F: locks for ν → 0.5 and in plastic flow.
@@ -213,6 +214,9 @@ pub enum FormulationDeck {
     /// Enhanced assumed strains (Simo–Armero Q1/E9): thin walls bend with one element
     /// through the thickness.
     Eas,
+    /// Displacements and one pressure unknown per element (Abaqus' C3D8H): mean
+    /// dilatation with the pressure solved for; static and implicit analyses.
+    Hybrid,
 }
 
 #[derive(Debug, Clone, Deserialize, Serialize)]
