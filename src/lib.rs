@@ -25,3 +25,8 @@ pub mod scene;
 pub mod solve;
 
 pub use error::{Error, ErrorKind, Result};
+
+/// The version and the commit alfe was built from (`alfe --version`, `summary.json`).
+pub const VERSION: &str = concat!(env!("CARGO_PKG_VERSION"), " (", env!("ALFE_COMMIT"), ")");
+/// The commit alone.
+pub const COMMIT: &str = env!("ALFE_COMMIT");

@@ -1,243 +1,321 @@
-//! The `alfe` command line: parse arguments, call the library, map errors to exit codes
-//! (0 ok, 1 runtime failure, 2 bad input, 3 not converged; README "Exit codes").
+//! The `alfe` command line: parse arguments (clap), call the library, map errors to exit
+//! codes (0 ok, 1 runtime failure, 2 bad input, 3 not converged; README "Exit codes").
 
 use alfe::app::{self, RunOptions};
+use alfe::contact::wall::ContactMethod;
 use alfe::parallel::{Comm, MpiComm};
+use alfe::solve::nonlinear::SolverKind;
 use alfe::{Error, Result};
+use clap::{Parser, Subcommand, ValueEnum};
 use std::path::PathBuf;
 
-const USAGE: &str = "\
-alfe — distributed implicit finite elements for solids in contact
-
-usage:
-  alfe                                   run the default scene (cantilever)
-  alfe run [SCENE|DECK] [options]        run a built-in scene or a deck file
-      --out DIR          results directory (default out/<scene>)
-      --partitions DIR   partition cache directory (default partitions)
-      --repartition      recompute a cached partition instead of using it
-      --quiet            no progress lines
-      --solver S         newton | bfgs | jfnk (overrides the deck's [solver] nonlinear)
-      --contact M        alm | penalty (switches every [[walls]], [[entities]] and [[pairs]]
-                         entry of the scene; [[bolts]] sections stay tied by ALM)
-  alfe scenes                            list the built-in scenes
-  alfe scene show NAME                   print a built-in scene's deck
-  alfe check SCENE|DECK [--ranks N]      validate; print model size and partition quality
-  alfe partition SCENE|DECK --ranks N [--partitions DIR]
-                                         write the METIS partition to the cache
-  alfe bench-linear [--cells NX,NY,NZ] [--rtol R] [--json FILE] [--export DIR]
-                    [--pc block-jacobi|asm|amg [--rigid-body-modes]]
-                                         linear-elastic block: assembly, preconditioner set-up,
-                                         GMRES, HDF5 rates (scripts/bench-core uses it)
-  alfe bench-residual [--cells NX,NY,NZ] [--reps N] [--json FILE]
-                                         residual/tangent rates per material and formulation
-
-Run on several ranks with `mpirun -n N alfe run ...`.
-exit codes: 0 ok, 1 runtime failure, 2 bad input, 3 not converged";
-
-struct Args {
-    words: Vec<String>,
-    flags: Vec<(String, Option<String>)>,
+/// alfe — distributed implicit finite elements for solids in contact.
+///
+/// Run on several ranks with `mpirun -n N alfe run ...`. `alfe DECK` is `alfe run DECK`;
+/// `alfe` alone runs the default scene (cantilever).
+/// Exit codes: 0 ok, 1 runtime failure, 2 bad input, 3 not converged.
+#[derive(Parser, Debug)]
+#[command(name = "alfe", version = alfe::VERSION, about, long_about)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
 }
 
-/// Split arguments into positional words and `--flag [value]` pairs.
-fn parse_args(raw: &[String], valued: &[&str], bare: &[&str]) -> Result<Args> {
-    let mut words = Vec::new();
-    let mut flags = Vec::new();
-    let mut i = 0;
-    while i < raw.len() {
-        let a = &raw[i];
-        if let Some(name) = a.strip_prefix("--") {
-            if valued.contains(&name) {
-                let v = raw
-                    .get(i + 1)
-                    .ok_or_else(|| Error::input(format!("--{name}: expected a value")))?;
-                flags.push((name.to_string(), Some(v.clone())));
-                i += 2;
-                continue;
-            } else if bare.contains(&name) {
-                flags.push((name.to_string(), None));
-            } else {
-                return Err(Error::input(format!(
-                    "unknown option `{a}` (see `alfe --help`)"
-                )));
-            }
-        } else {
-            words.push(a.clone());
+#[derive(Subcommand, Debug)]
+enum Command {
+    /// Run a built-in scene or a deck file (the default command).
+    Run(RunArgs),
+    /// List the built-in scenes, one line each.
+    Scenes,
+    /// Print a built-in scene's deck (`alfe scene show NAME > my.toml`).
+    Scene {
+        #[command(subcommand)]
+        what: SceneCommand,
+    },
+    /// Validate a deck; print the model size, its contributions and partition quality.
+    Check {
+        /// Built-in scene name or deck path (default: cantilever).
+        target: Option<String>,
+        /// Partition for this many ranks and report its quality.
+        #[arg(short = 'n', long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..))]
+        ranks: u32,
+    },
+    /// Write the METIS partition for a rank count to the partition cache.
+    Partition {
+        /// Built-in scene name or deck path.
+        target: Option<String>,
+        /// The rank count to partition for.
+        #[arg(short = 'n', long, value_parser = clap::value_parser!(u32).range(1..))]
+        ranks: u32,
+        /// Partition cache directory.
+        #[arg(long, default_value = "partitions")]
+        partitions: PathBuf,
+    },
+    /// Linear-elastic block: assembly, preconditioner set-up, GMRES and HDF5 rates
+    /// (scripts/bench-core uses it).
+    BenchLinear {
+        /// Cells NX,NY,NZ.
+        #[arg(long)]
+        cells: Option<String>,
+        /// GMRES relative tolerance.
+        #[arg(long)]
+        rtol: Option<String>,
+        /// Write the measurements to this JSON file.
+        #[arg(long)]
+        json: Option<String>,
+        /// Export the matrix and right-hand side to this directory.
+        #[arg(long)]
+        export: Option<String>,
+        /// Preconditioner: block-jacobi, asm or amg.
+        #[arg(long)]
+        pc: Option<String>,
+        /// AMG's near-null space from the rigid-body rotations.
+        #[arg(long)]
+        rigid_body_modes: bool,
+    },
+    /// Residual and tangent rates per material and formulation.
+    BenchResidual {
+        /// Cells NX,NY,NZ.
+        #[arg(long)]
+        cells: Option<String>,
+        /// Repetitions.
+        #[arg(long)]
+        reps: Option<String>,
+        /// Write the measurements to this JSON file.
+        #[arg(long)]
+        json: Option<String>,
+    },
+}
+
+#[derive(Subcommand, Debug)]
+enum SceneCommand {
+    /// Print the deck of a built-in scene.
+    Show {
+        /// The scene's name (see `alfe scenes`).
+        name: String,
+    },
+}
+
+#[derive(clap::Args, Debug)]
+struct RunArgs {
+    /// Built-in scene name or deck path (default: cantilever). A name is looked up among
+    /// the built-in scenes first, then as a file.
+    target: Option<String>,
+    /// Results directory (default out/<scene>).
+    #[arg(short, long, value_name = "DIR")]
+    out: Option<PathBuf>,
+    /// Partition cache directory.
+    #[arg(long, value_name = "DIR", default_value = "partitions")]
+    partitions: PathBuf,
+    /// Recompute a cached partition instead of using it.
+    #[arg(long)]
+    repartition: bool,
+    /// No progress lines.
+    #[arg(short, long)]
+    quiet: bool,
+    /// Nonlinear solver (overrides the deck's `[solver] nonlinear`).
+    #[arg(short, long, value_enum)]
+    solver: Option<SolverArg>,
+    /// Contact enforcement of every [[walls]], [[entities]] and [[pairs]] entry
+    /// ([[bolts]] sections stay tied by ALM).
+    #[arg(short, long, value_enum)]
+    contact: Option<ContactArg>,
+    /// Write every nonlinear iteration's residual, failed attempts included, to
+    /// iterations.csv.
+    #[arg(long)]
+    iterations: bool,
+}
+
+#[derive(ValueEnum, Clone, Copy, Debug)]
+enum SolverArg {
+    Newton,
+    Bfgs,
+    Jfnk,
+}
+
+#[derive(ValueEnum, Clone, Copy, Debug)]
+enum ContactArg {
+    Alm,
+    Penalty,
+}
+
+impl SolverArg {
+    fn kind(self) -> SolverKind {
+        match self {
+            SolverArg::Newton => SolverKind::Newton,
+            SolverArg::Bfgs => SolverKind::Bfgs,
+            SolverArg::Jfnk => SolverKind::Jfnk,
         }
-        i += 1;
-    }
-    Ok(Args { words, flags })
-}
-
-impl Args {
-    fn get(&self, name: &str) -> Option<&str> {
-        self.flags
-            .iter()
-            .rev()
-            .find(|(n, _)| n == name)
-            .and_then(|(_, v)| v.as_deref())
-    }
-    fn has(&self, name: &str) -> bool {
-        self.flags.iter().any(|(n, _)| n == name)
-    }
-    fn ranks(&self) -> Result<Option<usize>> {
-        self.get("ranks")
-            .map(|v| {
-                v.parse::<usize>().ok().filter(|&n| n >= 1).ok_or_else(|| {
-                    Error::input(format!("--ranks: expected a positive integer, got `{v}`"))
-                })
-            })
-            .transpose()
     }
 }
 
-fn one_target(words: &[String], cmd: &str) -> Result<String> {
-    match words {
-        [] => Ok(alfe::scene::DEFAULT_SCENE.to_string()),
-        [t] => Ok(t.clone()),
-        _ => Err(Error::input(format!(
-            "`alfe {cmd}` takes one scene name or deck path, got {}",
-            words.len()
-        ))),
+impl ContactArg {
+    fn method(self) -> ContactMethod {
+        match self {
+            ContactArg::Alm => ContactMethod::Alm,
+            ContactArg::Penalty => ContactMethod::Penalty,
+        }
     }
 }
 
-fn main_inner(comm: &dyn Comm, raw: &[String]) -> Result<()> {
+/// The subcommand names (an argument that is none of them, nor an option, is a target
+/// to run: `alfe my.toml`).
+const COMMANDS: [&str; 8] = [
+    "run",
+    "scenes",
+    "scene",
+    "check",
+    "partition",
+    "bench-linear",
+    "bench-residual",
+    "help",
+];
+
+/// `alfe`, `alfe DECK` and `alfe --out DIR` mean `alfe run ...`.
+fn with_default_command(raw: Vec<String>) -> Vec<String> {
+    let mut args = vec!["alfe".to_string()];
+    let explicit = match raw.first().map(String::as_str) {
+        Some(a) => COMMANDS.contains(&a) || matches!(a, "-h" | "--help" | "-V" | "--version"),
+        None => false,
+    };
+    if !explicit {
+        args.push("run".into());
+    }
+    args.extend(raw);
+    args
+}
+
+fn target(t: Option<String>) -> String {
+    t.unwrap_or_else(|| alfe::scene::DEFAULT_SCENE.to_string())
+}
+
+/// A command-line mistake as one line (clap's first line, without its `error: `).
+fn usage_error(e: &clap::Error) -> Error {
+    let text = e.render().to_string();
+    let mut lines = text.lines().map(str::trim).filter(|l| !l.is_empty());
+    let mut first = lines
+        .next()
+        .unwrap_or("bad command line")
+        .trim_start_matches("error: ")
+        .to_string();
+    // "the following required arguments were not provided:" names them below.
+    if first.ends_with(':') {
+        if let Some(next) = lines.next() {
+            first = format!("{first} {next}");
+        }
+    }
+    Error::input(format!("{first} (see `alfe --help`)"))
+}
+
+fn main_inner(comm: &dyn Comm, raw: Vec<String>) -> Result<()> {
     let root = comm.rank() == 0;
     let say = |s: &str| {
         if root {
             println!("{s}");
         }
     };
-    let (cmd, rest) = match raw.first().map(|s| s.as_str()) {
-        None => ("run", &raw[..0]),
-        Some("-h") | Some("--help") | Some("help") => {
-            say(USAGE);
-            return Ok(());
+    let cli = match Cli::try_parse_from(with_default_command(raw)) {
+        Ok(c) => c,
+        Err(e) => {
+            use clap::error::ErrorKind;
+            return match e.kind() {
+                ErrorKind::DisplayHelp
+                | ErrorKind::DisplayVersion
+                | ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand => {
+                    if root {
+                        print!("{}", e.render());
+                    }
+                    Ok(())
+                }
+                _ => Err(usage_error(&e)),
+            };
         }
-        Some("--version") => {
-            say(concat!("alfe ", env!("CARGO_PKG_VERSION")));
-            return Ok(());
-        }
-        Some(c) if c.starts_with("--") => ("run", raw),
-        Some(c) => (c, &raw[1..]),
     };
-    match cmd {
-        "run" => {
-            let a = parse_args(
-                rest,
-                &["out", "partitions", "solver", "contact"],
-                &["repartition", "quiet"],
-            )?;
-            let solver = a
-                .get("solver")
-                .map(|s| {
-                    alfe::solve::nonlinear::SolverKind::parse(s).ok_or_else(|| {
-                        Error::input(format!(
-                            "--solver: expected newton, bfgs or jfnk, got `{s}`"
-                        ))
-                    })
-                })
-                .transpose()?;
-            let contact = a
-                .get("contact")
-                .map(|s| {
-                    alfe::contact::wall::ContactMethod::parse(s).ok_or_else(|| {
-                        Error::input(format!("--contact: expected alm or penalty, got `{s}`"))
-                    })
-                })
-                .transpose()?;
+    match cli.command {
+        Command::Run(a) => {
             let opts = RunOptions {
-                contact,
-                target: one_target(&a.words, "run")?,
-                out: a.get("out").map(PathBuf::from),
-                partitions: PathBuf::from(a.get("partitions").unwrap_or("partitions")),
-                repartition: a.has("repartition"),
-                quiet: a.has("quiet"),
-                solver,
+                contact: a.contact.map(ContactArg::method),
+                target: target(a.target),
+                out: a.out,
+                partitions: a.partitions,
+                repartition: a.repartition,
+                quiet: a.quiet,
+                solver: a.solver.map(SolverArg::kind),
+                iterations: a.iterations,
             };
             let s = app::run(comm, &opts)?.summary;
-            say(&format!(
-                "alfe: {} steps converged in {:.2} s ({} nonlinear, {} GMRES iterations); results in {}/ ({}.h5, {}.xmf, history.csv, summary.json)",
-                s.steps, s.wall_time_s, s.nonlinear_iterations, s.linear_iterations, s.output_dir, s.scene, s.scene
-            ));
+            say(&s.headline());
             Ok(())
         }
-        "scenes" => {
-            parse_args(rest, &[], &[])?;
+        Command::Scenes => {
             for (name, desc, _) in alfe::scene::BUILTIN {
                 say(&format!("{name:<14} {desc}"));
             }
             Ok(())
         }
-        "scene" => match rest {
-            [show, name] if show == "show" => {
-                let (_, _, text) = alfe::scene::BUILTIN
-                    .iter()
-                    .find(|(n, _, _)| n == name)
-                    .ok_or_else(|| {
-                        Error::input(format!(
-                            "unknown scene `{name}` (built-in scenes: {})",
-                            alfe::scene::BUILTIN
-                                .iter()
-                                .map(|s| s.0)
-                                .collect::<Vec<_>>()
-                                .join(", ")
-                        ))
-                    })?;
-                if root {
-                    print!("{text}");
-                }
-                Ok(())
+        Command::Scene {
+            what: SceneCommand::Show { name },
+        } => {
+            let (_, _, text) = alfe::scene::BUILTIN
+                .iter()
+                .find(|(n, _, _)| *n == name)
+                .ok_or_else(|| {
+                    Error::input(format!(
+                        "unknown scene `{name}` (built-in scenes: {})",
+                        alfe::scene::BUILTIN
+                            .iter()
+                            .map(|s| s.0)
+                            .collect::<Vec<_>>()
+                            .join(", ")
+                    ))
+                })?;
+            if root {
+                print!("{text}");
             }
-            _ => Err(Error::input("usage: alfe scene show NAME")),
-        },
-        "check" => {
-            let a = parse_args(rest, &["ranks"], &[])?;
-            let target = one_target(&a.words, "check")?;
-            let ranks = a.ranks()?.unwrap_or(1);
-            let r = app::on_rank0(comm, || app::check(&target, ranks))?;
+            Ok(())
+        }
+        Command::Check { target: t, ranks } => {
+            let t = target(t);
+            let r = app::on_rank0(comm, || app::check(&t, ranks as usize))?;
             if let Some(s) = r {
                 print!("{s}");
             }
             Ok(())
         }
-        "partition" => {
-            let a = parse_args(rest, &["ranks", "partitions"], &[])?;
-            let target = one_target(&a.words, "partition")?;
-            let ranks = a.ranks()?.ok_or_else(|| {
-                Error::input("--ranks: required (the rank count to partition for)")
-            })?;
-            let dir = PathBuf::from(a.get("partitions").unwrap_or("partitions"));
-            let r = app::on_rank0(comm, || app::partition(&target, ranks, &dir))?;
+        Command::Partition {
+            target: t,
+            ranks,
+            partitions,
+        } => {
+            let t = target(t);
+            let r = app::on_rank0(comm, || app::partition(&t, ranks as usize, &partitions))?;
             if let Some(s) = r {
                 print!("{s}");
             }
             Ok(())
         }
-        "bench-linear" => {
-            let a = parse_args(
-                rest,
-                &["cells", "rtol", "json", "export", "pc"],
-                &["rigid-body-modes"],
-            )?;
-            alfe::bench::bench_linear(
-                comm,
-                a.get("cells"),
-                a.get("rtol"),
-                a.get("json"),
-                a.get("export"),
-                a.get("pc"),
-                a.has("rigid-body-modes"),
-            )
-        }
-        "bench-residual" => {
-            let a = parse_args(rest, &["cells", "reps", "json"], &[])?;
-            alfe::bench_residual::bench_residual(comm, a.get("cells"), a.get("reps"), a.get("json"))
-        }
-        other => Err(Error::input(format!(
-            "unknown command `{other}` (see `alfe --help`)"
-        ))),
+        Command::BenchLinear {
+            cells,
+            rtol,
+            json,
+            export,
+            pc,
+            rigid_body_modes,
+        } => alfe::bench::bench_linear(
+            comm,
+            cells.as_deref(),
+            rtol.as_deref(),
+            json.as_deref(),
+            export.as_deref(),
+            pc.as_deref(),
+            rigid_body_modes,
+        ),
+        Command::BenchResidual { cells, reps, json } => alfe::bench_residual::bench_residual(
+            comm,
+            cells.as_deref(),
+            reps.as_deref(),
+            json.as_deref(),
+        ),
     }
 }
 
@@ -265,7 +343,7 @@ fn main() {
     }));
     let comm = MpiComm::new(universe.world());
     let raw: Vec<String> = std::env::args().skip(1).collect();
-    let res = main_inner(&comm, &raw);
+    let res = main_inner(&comm, raw);
     let code = match &res {
         Ok(()) => 0,
         Err(e) => {

@@ -39,6 +39,7 @@ fn solve_with(
         repartition: false,
         quiet: true,
         solver: None,
+        iterations: false,
     };
     let Setup { mut model, run, .. } = setup(comm, &ro, &mut Phases::default()).unwrap();
     let mut opts = run.solver.clone();

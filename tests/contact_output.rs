@@ -100,6 +100,7 @@ fn run_in(name: &str, text: &str, contact: Option<ContactMethod>) -> (RunOutcome
         repartition: false,
         quiet: true,
         solver: None,
+        iterations: false,
     };
     let o = run(&SerialComm, &opts).unwrap_or_else(|e| panic!("{name}: {e}"));
     (o, out)

@@ -201,6 +201,7 @@ fn a_busy_output_directory_is_refused() {
         repartition: false,
         quiet: true,
         solver: None,
+        iterations: false,
     };
     let e = alfe::app::run(&alfe::parallel::SerialComm, &opts)
         .err()

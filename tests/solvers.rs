@@ -31,6 +31,7 @@ fn run_with(name: &str, text: &str, solver: SolverKind) -> alfe::app::RunOutcome
         repartition: false,
         quiet: true,
         solver: Some(solver),
+        iterations: false,
     };
     alfe::app::run(&SerialComm, &opts).unwrap_or_else(|e| panic!("{name}: {e}"))
 }

@@ -31,7 +31,8 @@
 //!
 //! Kept general on purpose: any block row with the attached pattern is condensed, so
 //! multipliers of later contact kinds (deformable faces, one multiplier block per slave
-//! node) are too. A row may have a few neighbours instead of one node, as long as they
+//! node) are too, and so is a hybrid hex8's pressure block (`fem/hybrid.rs`), attached
+//! to its 8 nodes: what is factored is then F-bar's matrix. A row may have a few neighbours instead of one node, as long as they
 //! are already coupled to each other, so the elimination fills nothing: the multipliers
 //! of a node tracked by a contact entity couple to the node and to the body's two
 //! blocks, which the node couples to already (without this, an entity's multipliers
@@ -47,8 +48,12 @@ use super::block_jacobi::LocalBlockPattern;
 pub const REGULARIZATION: f64 = 1e-6;
 
 /// The most neighbours an attached block row may have (a multiplier of a node tracked
-/// by a rigid body: the node and the body's translation and rotation blocks).
-const MAX_NEIGHBOURS: usize = 8;
+/// by a rigid body: the node and the body's translation and rotation blocks)...
+const MAX_NEIGHBOURS: usize = 4;
+/// ... or exactly this many: a hybrid hex8's pressure block and its 8 nodes. Not "up
+/// to 8": the corner node of a hex mesh has 7 mutually coupled neighbours and is not an
+/// algebraic unknown (eliminating it would only perturb the factorization by δ).
+const ELEMENT_NEIGHBOURS: usize = 8;
 
 /// One attached block row `m`: its diagonal entry and its neighbours
 /// (`nbrs[nb.clone()]`), whose mutual entries are the fill of its elimination.
@@ -101,7 +106,8 @@ impl Condensation {
     /// The attached block rows of `pat`, or `None` if there are none.
     ///
     /// A block row `m` is attached if its row and column have the same blocks (its
-    /// diagonal and at most [`MAX_NEIGHBOURS`] neighbours), every pair of its
+    /// diagonal and at most [`MAX_NEIGHBOURS`] or exactly [`ELEMENT_NEIGHBOURS`]
+    /// neighbours), every pair of its
     /// neighbours is already coupled (so eliminating it fills nothing new), and no
     /// neighbour is eliminated itself (rows are taken from the highest index down, so
     /// of two rows attached to each other the lower one stays).
@@ -118,10 +124,11 @@ impl Condensation {
         // Per taken pair: its neighbours (original index, e_xm, e_mx).
         let mut pair_nbrs: Vec<(usize, usize, usize)> = Vec::new();
         let mut pair_ranges = Vec::new();
-        let mut nb: Vec<(usize, usize)> = Vec::with_capacity(MAX_NEIGHBOURS);
+        let mut nb: Vec<(usize, usize)> = Vec::with_capacity(ELEMENT_NEIGHBOURS);
         'rows: for m in (0..n).rev() {
             let len = row(m).len();
-            if !(2..=MAX_NEIGHBOURS + 1).contains(&len) || col_count[m] != len {
+            let sized = (2..=MAX_NEIGHBOURS + 1).contains(&len) || len == ELEMENT_NEIGHBOURS + 1;
+            if !sized || col_count[m] != len {
                 continue;
             }
             nb.clear();
@@ -379,6 +386,56 @@ fn inverse3(m: &[f64; 9]) -> Option<[f64; 9]> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The pattern of `n` fully coupled blocks (one element's nodes), plus `extra`
+    /// blocks each coupled to all of them and to itself alone.
+    fn element_pattern(n: usize, extra: usize) -> LocalBlockPattern {
+        let total = n + extra;
+        let mut pat = LocalBlockPattern {
+            n_nodes: total,
+            row_ptr: vec![0],
+            cols: Vec::new(),
+            entries: Vec::new(),
+        };
+        for i in 0..total {
+            let cols: Vec<usize> = if i < n {
+                (0..n).chain(n..total).collect()
+            } else {
+                (0..n).chain(std::iter::once(i)).collect()
+            };
+            for c in cols {
+                pat.cols.push(c);
+                pat.entries.push(pat.entries.len());
+            }
+            pat.row_ptr.push(pat.cols.len());
+        }
+        pat
+    }
+
+    /// A hybrid hex8's pressure block (8 neighbours) is eliminated; the corner nodes of
+    /// a lone hex8 (7 mutually coupled neighbours each) are not, while a lone tet's
+    /// (3 neighbours) are few enough to be attached, as before.
+    #[test]
+    fn pressure_blocks_are_attached_and_hex_corner_nodes_are_not() {
+        let c = Condensation::find(&element_pattern(8, 1)).expect("the pressure block");
+        assert_eq!(c.n_condensed(), 1);
+        assert_eq!(c.kept(), &(0..8).collect::<Vec<_>>()[..]);
+        assert!(Condensation::find(&element_pattern(8, 0)).is_none());
+        // Two blocks on the same 8 nodes: each is attached to the nodes alone.
+        assert_eq!(
+            Condensation::find(&element_pattern(8, 2))
+                .unwrap()
+                .n_condensed(),
+            2
+        );
+        // 4 nodes of a tet: 3 neighbours each, attached as before (the highest first).
+        assert_eq!(
+            Condensation::find(&element_pattern(4, 0))
+                .unwrap()
+                .n_condensed(),
+            1
+        );
+    }
 
     #[test]
     fn inverse3_inverts() {

@@ -234,6 +234,13 @@ pub trait Contribution {
     /// The last evaluation becomes the start of the next step.
     fn commit(&mut self) {}
 
+    /// After a step failed to converge: what this contribution saw go wrong in it, in an
+    /// analyst's words (a wall: nodes that kept switching between stick and slip), or
+    /// `None`.
+    fn diagnose(&self) -> Option<String> {
+        None
+    }
+
     /// History columns (the same on every rank).
     fn columns(&self) -> Vec<Column> {
         Vec::new()

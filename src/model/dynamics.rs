@@ -228,11 +228,8 @@ impl Model {
                 }
             }
         }
-        if !comm.all_ok(failure.is_none()) {
-            return Err(Error::runtime(format!(
-                "stable time step: {}",
-                failure.unwrap_or_else(|| "an element on another rank failed".into())
-            )));
+        if let Some(why) = comm.first_message(failure) {
+            return Err(Error::runtime(format!("stable time step: {why}")));
         }
         let mut m = [-best.0];
         comm.allreduce_max(&mut m);

@@ -378,7 +378,7 @@ impl Model {
         comm.allreduce_sum(&mut sums);
         self.work = u_local;
         if sums[2] > 0.0 {
-            let msg = failure.unwrap_or_else(|| "an element on another rank failed".into());
+            let msg = comm.first_message(failure).unwrap_or_default();
             return Err(Error::convergence(format!(
                 "residual could not be evaluated: {msg}"
             )));
@@ -444,13 +444,19 @@ impl Model {
         let failure = self.evaluate_all(&u_local, t, None, Some(k), false);
         k.finish_assembly(comm);
         self.work = u_local;
-        if !comm.all_ok(failure.is_none()) {
-            let msg = failure.unwrap_or_else(|| "an element on another rank failed".into());
+        if let Some(msg) = comm.first_message(failure) {
             return Err(Error::convergence(format!(
                 "Jacobian could not be assembled: {msg}"
             )));
         }
         Ok(())
+    }
+
+    /// Collective, after a failed step: the first contribution diagnosis on the lowest
+    /// rank that has one (the same text on every rank).
+    pub fn diagnose(&self, comm: &dyn Comm) -> Option<String> {
+        let mine: Vec<String> = self.each_ref().filter_map(|c| c.diagnose()).collect();
+        comm.first_message((!mine.is_empty()).then(|| mine.join("; ")))
     }
 
     /// Accept the state of the last converged evaluation.

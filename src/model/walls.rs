@@ -180,6 +180,10 @@ pub struct NodeContact {
     pub cone_excess: f64,
 }
 
+/// Stick/slip switches of one node within a step from which a failed step is reported as
+/// stick/slip cycling.
+const CYCLING_FLIPS: u32 = 4;
+
 /// One wall on this rank (its owned tracked nodes).
 #[derive(Debug)]
 pub struct Wall {
@@ -648,6 +652,26 @@ impl Contribution for Wall {
         self.body
             .as_ref()
             .map_or(Vec::new(), |b| b.initial_velocities(dofs))
+    }
+
+    /// Stick/slip cycling: nodes that switched between stick and slip at least
+    /// [`CYCLING_FLIPS`] times since the step began.
+    fn diagnose(&self) -> Option<String> {
+        let cycling: Vec<usize> = (0..self.flips.len())
+            .filter(|&j| self.flips[j] >= CYCLING_FLIPS)
+            .collect();
+        let worst = *cycling.iter().max_by_key(|&&j| self.flips[j])?;
+        let x = self.x_new[worst];
+        Some(format!(
+            "stick/slip cycling at {} `{}`: {} node(s) switched between stick and slip {CYCLING_FLIPS} or more times in this step, one {} times at ({:.4e}, {:.4e}, {:.4e})",
+            if self.body.is_some() { "entity" } else { "wall" },
+            self.def.name,
+            cycling.len(),
+            self.flips[worst],
+            x[0],
+            x[1],
+            x[2]
+        ))
     }
 
     fn commit(&mut self) {

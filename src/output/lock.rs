@@ -15,7 +15,8 @@ pub struct OutLock {
     path: PathBuf,
 }
 
-fn host() -> String {
+/// This machine's host name (empty if unknown).
+pub(crate) fn host() -> String {
     std::fs::read_to_string("/proc/sys/kernel/hostname")
         .map(|h| h.trim().to_string())
         .unwrap_or_default()

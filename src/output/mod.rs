@@ -2,7 +2,10 @@
 //! XDMF3 description beside it that ParaView opens as a time series ([`xdmf`]).
 
 pub mod h5;
+pub mod iterations;
 pub mod lock;
+pub mod log;
+pub mod record;
 pub mod results;
 pub mod xdmf;
 

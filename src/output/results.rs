@@ -536,6 +536,7 @@ mod tests {
 
     fn record(energies: bool, columns: Vec<f64>) -> StepRecord {
         StepRecord {
+            failed: Vec::new(),
             step: 3,
             time: 0.75,
             stage: 1,

@@ -62,6 +62,29 @@ pub trait Comm {
         self.allreduce_max_u64(&mut v);
         v[0] == 0
     }
+    /// The message of the lowest rank that has one, on every rank (`None` if no rank
+    /// has one): a failure found on one rank (an inverted element) is reported by every
+    /// rank in its own words. Two collectives; meant for failure paths.
+    fn first_message(&self, mine: Option<String>) -> Option<String> {
+        let n = self.size() as u64;
+        let mut v = [if mine.is_some() {
+            n - self.rank() as u64
+        } else {
+            0
+        }];
+        self.allreduce_max_u64(&mut v);
+        if v[0] == 0 {
+            return None;
+        }
+        let root = (n - v[0]) as usize;
+        let mut bytes = if self.rank() == root {
+            mine.unwrap_or_default().into_bytes()
+        } else {
+            Vec::new()
+        };
+        self.broadcast_bytes(root, &mut bytes);
+        Some(String::from_utf8_lossy(&bytes).into_owned())
+    }
     /// Dot product of two distributed vectors given by their owned parts.
     fn dot(&self, a: &[f64], b: &[f64]) -> f64 {
         let mut s = [a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>()];

@@ -281,6 +281,19 @@ mod tests {
     use super::*;
     use crate::parallel::{HaloPlan, Layout};
 
+    /// Every rank gets the lowest rank's message, or none if no rank has one.
+    #[test]
+    fn first_message_is_the_lowest_ranks() {
+        let out = run_ranks(3, |c| {
+            let mine = (c.rank() > 0).then(|| format!("element on rank {}", c.rank()));
+            (c.first_message(mine), c.first_message(None))
+        });
+        for (some, none) in out {
+            assert_eq!(some.as_deref(), Some("element on rank 1"));
+            assert_eq!(none, None);
+        }
+    }
+
     #[test]
     fn allreduce_is_identical_on_all_ranks() {
         let out = run_ranks(3, |c| {

@@ -865,7 +865,9 @@ fn run_settings(deck: &Deck, timeline: &super::steps::Timeline) -> RunSettings {
                 .iter()
                 .map(|s| s.output_every.unwrap_or(deck.output.every))
                 .collect(),
+            iterations: deck.output.iterations,
         },
+        echo: String::new(),
     }
 }
 

@@ -724,6 +724,10 @@ pub struct OutputDeck {
     /// (`<part>.max_von_mises`) and, its largest over the run, to summary.json.
     #[serde(default)]
     pub peak_stress: Vec<String>,
+    /// Write every nonlinear iteration's residual, failed attempts included, to
+    /// `iterations.csv` (also `alfe run --iterations`).
+    #[serde(default)]
+    pub iterations: bool,
 }
 
 fn yes() -> bool {
@@ -741,6 +745,7 @@ impl Default for OutputDeck {
             interval: None,
             displacements: Vec::new(),
             peak_stress: Vec::new(),
+            iterations: false,
         }
     }
 }

@@ -37,6 +37,9 @@ pub struct RunSettings {
     /// The nonlinear solver and its linear solves (`char_length` is set at run time).
     pub solver: NonlinearOptions,
     pub output: OutputSettings,
+    /// The deck as read, defaults filled in (TOML), for the run's record (`deck.toml`).
+    #[serde(default)]
+    pub echo: String,
 }
 
 /// When fields are written.
@@ -48,6 +51,9 @@ pub struct OutputSettings {
     pub interval: f64,
     /// Static runs with analysis steps: `every` of each step (its last increment always).
     pub stage_every: Vec<usize>,
+    /// Every iteration's residual to `iterations.csv`.
+    #[serde(default)]
+    pub iterations: bool,
 }
 
 /// Built-in scenes: (name, one-line description, deck text).
@@ -218,11 +224,58 @@ pub fn load(name_or_path: &str) -> Result<Source> {
 pub fn read(src: &Source) -> Result<Scene> {
     let deck =
         deck::parse(&src.text).map_err(|e| Error::input(format!("deck {}: {e}", src.label)))?;
-    build::build(&deck, &src.dir).map_err(|e| e.context(format!("deck {}", src.label)))
+    let mut scene =
+        build::build(&deck, &src.dir).map_err(|e| e.context(format!("deck {}", src.label)))?;
+    scene.run.echo = echo(&deck, &src.dir);
+    Ok(scene)
+}
+
+/// The deck as read, as TOML: every default filled in, empty lists left out, and mesh
+/// files made absolute, so the echo runs as it stands from anywhere (`deck.toml` of a
+/// run's record).
+fn echo(deck: &deck::Deck, dir: &Path) -> String {
+    let mut v = match toml::Value::try_from(deck) {
+        Ok(v) => v,
+        Err(e) => return format!("# (the deck as read cannot be written back: {e})\n"),
+    };
+    if let Some(t) = v.as_table_mut() {
+        t.retain(|_, x| !matches!(x, toml::Value::Array(a) if a.is_empty()));
+        let parts = t.get_mut("parts").and_then(|p| p.as_array_mut());
+        for part in parts.into_iter().flatten() {
+            let file = part
+                .get_mut("mesh")
+                .and_then(|m| m.get_mut("file"))
+                .and_then(|f| match f {
+                    toml::Value::String(s) => Some(s),
+                    _ => None,
+                });
+            if let Some(f) = file {
+                let p = dir.join(&*f);
+                *f = std::fs::canonicalize(&p).unwrap_or(p).display().to_string();
+            }
+        }
+    }
+    toml::to_string(&v)
+        .unwrap_or_else(|e| format!("# (the deck as read cannot be written back: {e})\n"))
 }
 
 #[cfg(test)]
 mod tests {
+    /// Every built-in scene's echo (`deck.toml` of a run) reads back as the same deck.
+    #[test]
+    fn echo_reads_back_as_the_same_deck() {
+        for (name, _, text) in super::BUILTIN {
+            let d = super::deck::parse(text).unwrap();
+            let e = super::echo(&d, std::path::Path::new("."));
+            let back = super::deck::parse(&e).unwrap_or_else(|err| panic!("{name}: {err}\n{e}"));
+            assert_eq!(
+                toml::Value::try_from(&d).unwrap(),
+                toml::Value::try_from(&back).unwrap(),
+                "{name}"
+            );
+        }
+    }
+
     /// `preconditioner = "auto"` keeps block Jacobi for the classes AMG was measured
     /// not to suit, and names why; the others stay `auto` (AMG from a size on).
     #[test]

@@ -50,6 +50,17 @@ pub struct StepRecord {
     pub energies: Option<crate::solve::time::energy::Energies>,
     /// The contributions' history columns ([`Model::columns`]), reduced over ranks.
     pub columns: Vec<f64>,
+    /// The attempts at this step that failed before it converged (cut and retried).
+    pub failed: Vec<Attempt>,
+}
+
+/// One attempt at a step: from `t_start` to `t_end`, its solver's counts, residual
+/// history and, if it failed, why.
+#[derive(Debug, Clone)]
+pub struct Attempt {
+    pub t_start: f64,
+    pub t_end: f64,
+    pub stats: SolveStats,
 }
 
 /// Totals over the run.
@@ -66,6 +77,8 @@ pub struct RunTotals {
     pub seconds_linear: f64,
     /// Why the run stopped early, if it did.
     pub failure: Option<String>,
+    /// The failed attempts at the step that stopped the run.
+    pub failed_last: Vec<Attempt>,
     /// Counts by analysis step (`Analysis::stages`; one entry without stages), failed
     /// attempts included.
     pub by_stage: Vec<StageTotals>,
@@ -135,6 +148,8 @@ pub fn run_static(
     // The last converged increment and its step, for the predictor.
     let mut last: Option<(Vec<f64>, f64)> = None;
     let mut failed = false;
+    // Failed attempts at the current step.
+    let mut pending: Vec<Attempt> = Vec::new();
     while let Some((t_n, t)) = ctl.next() {
         let g = model.prescribed(t);
         let mut trial = u.clone();
@@ -159,16 +174,21 @@ pub fn run_static(
         };
         tot.add_in(stage, &stats);
         if !stats.converged {
-            if std::env::var("ALFE_DEBUG").is_ok() {
-                eprintln!(
-                    "DEBUG failed step t={t}: {:?} {}",
-                    stats.residual_history, stats.reason
-                );
+            let mut stats = stats;
+            if let Some(why) = model.diagnose(comm) {
+                stats.reason = format!("{}; {why}", stats.reason);
             }
             pc.invalidate();
             failed = true;
-            if let Err(why) = ctl.reject(t, &stats.reason, "step") {
+            let reason = stats.reason.clone();
+            pending.push(Attempt {
+                t_start: t_n,
+                t_end: t,
+                stats,
+            });
+            if let Err(why) = ctl.reject(t, &reason, "step") {
                 tot.failure = Some(why);
+                tot.failed_last = pending;
                 return Ok(tot);
             }
             tot.retries += 1;
@@ -192,6 +212,7 @@ pub fn run_static(
             displacements: model.mean_displacements(comm, u),
             energies: None,
             columns: model.column_values(comm, u, t),
+            failed: std::mem::take(&mut pending),
         };
         on_step(&rec, u, model)?;
         t0 = Instant::now();

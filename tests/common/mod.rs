@@ -40,6 +40,7 @@ pub fn try_run_deck(name: &str, text: &str) -> alfe::Result<RunOutcome> {
         repartition: false,
         quiet: true,
         solver: None,
+        iterations: false,
     };
     run(&SerialComm, &opts)
 }

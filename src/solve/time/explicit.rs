@@ -120,6 +120,7 @@ pub fn run_explicit(
             displacements: model.mean_displacements(comm, &state.u),
             energies: Some(energy.current),
             columns: model.column_values(comm, &state.u, 0.0),
+            failed: Vec::new(),
         },
         state,
         model,
@@ -207,6 +208,7 @@ pub fn run_explicit(
             displacements: model.mean_displacements(comm, &state.u),
             energies: Some(en),
             columns: model.column_values(comm, &state.u, t1),
+            failed: Vec::new(),
         };
         on_step(&rec, state, model)?;
         t = t1;

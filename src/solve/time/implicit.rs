@@ -20,7 +20,7 @@ use crate::model::Model;
 use crate::parallel::Comm;
 use crate::solve::control::StepControl;
 use crate::solve::nonlinear::{solve, NonlinearOptions, NonlinearProblem, Preconditioning};
-use crate::solve::stepping::{RunTotals, StepRecord};
+use crate::solve::stepping::{Attempt, RunTotals, StepRecord};
 use crate::solve::{Analysis, MassKind, Scheme};
 use crate::{Error, Result};
 use std::time::Instant;
@@ -217,6 +217,7 @@ pub fn run_implicit(
             displacements: model.mean_displacements(comm, &state.u),
             energies: Some(energy.current),
             columns: model.column_values(comm, &state.u, 0.0),
+            failed: Vec::new(),
         },
         state,
         model,
@@ -224,6 +225,8 @@ pub fn run_implicit(
 
     let mut trial = vec![0.0; n];
     let mut t0 = Instant::now();
+    // Failed attempts at the current step.
+    let mut pending: Vec<Attempt> = Vec::new();
     while let Some((t_done, t1)) = ctl.next() {
         let stage = ctl.stage();
         let h = t1 - t_done;
@@ -255,9 +258,20 @@ pub fn run_implicit(
         };
         tot.add_in(stage, &stats);
         if !stats.converged {
+            let mut stats = stats;
+            if let Some(why) = model.diagnose(comm) {
+                stats.reason = format!("{}; {why}", stats.reason);
+            }
             pc.invalidate();
-            if let Err(why) = ctl.reject(t1, &stats.reason, "time step") {
+            let reason = stats.reason.clone();
+            pending.push(Attempt {
+                t_start: t_done,
+                t_end: t1,
+                stats,
+            });
+            if let Err(why) = ctl.reject(t1, &reason, "time step") {
                 tot.failure = Some(why);
+                tot.failed_last = pending;
                 return Ok(tot);
             }
             tot.retries += 1;
@@ -306,6 +320,7 @@ pub fn run_implicit(
             displacements: model.mean_displacements(comm, &state.u),
             energies: Some(en),
             columns: model.column_values(comm, &state.u, t1),
+            failed: std::mem::take(&mut pending),
         };
         on_step(&rec, state, model)?;
         t0 = Instant::now();

@@ -1,16 +1,21 @@
 //! What the commands do: `run`, `check`, `partition`. The CLI (`main.rs`) only parses
 //! arguments and maps errors to exit codes; tests call these functions directly.
 
+mod progress;
+
 use crate::model::def::ModelDef;
 use crate::model::distribute;
 use crate::model::Model;
+use crate::output::iterations::IterationLog;
+use crate::output::log::Log;
+use crate::output::record::RunRecord;
 use crate::output::results::ResultsWriter;
 use crate::parallel::{Comm, Traffic};
 use crate::partition::{cache, quality};
 use crate::scene::{RunSettings, Scene};
 use crate::solve::nonlinear::SolverKind;
-use crate::solve::stepping::StepRecord;
 use crate::solve::stepping::{run_static, RunTotals};
+use crate::solve::stepping::{Attempt, StepRecord};
 use crate::solve::time::explicit::run_explicit;
 use crate::solve::time::implicit::run_implicit;
 use crate::solve::time::{DynState, OutputClock};
@@ -36,6 +41,8 @@ pub struct RunOptions {
     pub solver: Option<SolverKind>,
     /// Switch every wall's enforcement (`--contact alm|penalty`).
     pub contact: Option<crate::contact::wall::ContactMethod>,
+    /// Write `iterations.csv` (`--iterations`; also the deck's `[output] iterations`).
+    pub iterations: bool,
 }
 
 /// What a run leaves behind besides its files (also written to `summary.json`).
@@ -88,6 +95,24 @@ pub struct Summary {
     pub partition: String,
     pub message: String,
     pub output_dir: String,
+    /// Which alfe ran what, how and when (also the header of `deck.toml`).
+    pub run: RunRecord,
+}
+
+impl Summary {
+    /// The one line a finished run ends with.
+    pub fn headline(&self) -> String {
+        format!(
+            "alfe: {} steps converged in {:.2} s ({} nonlinear, {} GMRES iterations); results in {}/ ({}.h5, {}.xmf, history.csv, summary.json, deck.toml, log.txt)",
+            self.steps,
+            self.wall_time_s,
+            self.nonlinear_iterations,
+            self.linear_iterations,
+            self.output_dir,
+            self.scene,
+            self.scene
+        )
+    }
 }
 
 #[derive(Debug, Clone, Default, serde::Serialize)]
@@ -179,6 +204,8 @@ pub struct Setup {
     pub run: RunSettings,
     /// "cache", "computed" or "trivial".
     pub partition: String,
+    /// What the deck left to alfe and alfe chose (rank 0; for `deck.toml`).
+    pub resolved: Vec<String>,
 }
 
 /// Collective: read and partition on rank 0, give each rank its piece and the run
@@ -217,11 +244,17 @@ pub fn setup(comm: &dyn Comm, opts: &RunOptions, phases: &mut Phases) -> Result<
             cache::Origin::Computed => "computed",
             cache::Origin::Trivial => "trivial",
         };
-        Ok((pieces, run, origin.to_string()))
+        let resolved = def
+            .part_names
+            .iter()
+            .zip(&def.part_formulation)
+            .map(|(n, f)| format!("part {n}: {}", f.describe()))
+            .collect();
+        Ok((pieces, run, origin.to_string(), resolved))
     })?;
-    let (pieces, run, origin) = match pieces {
-        Some((p, r, o)) => (Some(p), Some(r), o),
-        None => (None, None, String::new()),
+    let (pieces, run, origin, resolved) = match pieces {
+        Some((p, r, o, v)) => (Some(p), Some(r), o, v),
+        None => (None, None, String::new(), Vec::new()),
     };
     let tp = Instant::now();
     let local = distribute::scatter(comm, pieces)?;
@@ -235,6 +268,7 @@ pub fn setup(comm: &dyn Comm, opts: &RunOptions, phases: &mut Phases) -> Result<
         model,
         run,
         partition: origin,
+        resolved,
     })
 }
 
@@ -279,30 +313,80 @@ impl RunOutcome {
 }
 
 /// Collective: the whole `alfe run`. A run that did not converge returns
-/// `Err(Convergence)` after writing everything converged so far and the summary.
+/// `Err(Convergence)` after writing everything converged so far and the summary. Once
+/// the output directory is there, the run's record (`deck.toml`) and log (`log.txt`)
+/// are written, and the log ends with the run's last line or its error.
 pub fn run(comm: &dyn Comm, opts: &RunOptions) -> Result<RunOutcome> {
     let t_start = Instant::now();
+    let record = RunRecord::now(&opts.target, comm.size());
     let mut phases = Phases::default();
     let Setup {
-        mut model,
+        model,
         run: mut settings,
         partition: origin,
+        mut resolved,
     } = setup(comm, opts, &mut phases)?;
     settings.solver.preconditioner = settings
         .solver
         .preconditioner
         .resolve(comm.size(), model.dofs.dofs.global_len());
-    let scene = settings.name.clone();
     let out = opts
         .out
         .clone()
-        .unwrap_or_else(|| PathBuf::from("out").join(&scene));
+        .unwrap_or_else(|| PathBuf::from("out").join(&settings.name));
     // One run per output directory (rank 0 holds the lock until the run ends).
     let _lock = on_rank0(comm, || crate::output::lock::OutLock::acquire(&out))?;
+    let mut log = Log::open(&out, comm.rank() == 0, opts.quiet);
+    if settings.analysis.kind != AnalysisKind::Explicit {
+        resolved.push(format!(
+            "nonlinear = \"{}\", preconditioner = \"{}\", finite-difference length h = {:.4e}",
+            settings.solver.kind.name(),
+            settings.solver.preconditioner.name(),
+            settings.solver.char_length
+        ));
+    }
+    let written = on_rank0(comm, || {
+        record
+            .write_deck(&out, &settings.echo, &resolved)
+            .map_err(|e| {
+                Error::runtime(format!(
+                    "cannot write {}: {e}",
+                    out.join("deck.toml").display()
+                ))
+            })
+    });
+    let res = written.and_then(|_| {
+        execute(
+            comm, opts, model, settings, origin, record, &out, t_start, phases, &mut log,
+        )
+    });
+    match &res {
+        Ok(o) => log.file_only(&o.summary.headline()),
+        Err(e) => log.file_only(&format!("alfe: error: {e}")),
+    }
+    res
+}
+
+/// The analysis, the outputs and the summary of [`run`].
+#[allow(clippy::too_many_arguments)]
+fn execute(
+    comm: &dyn Comm,
+    opts: &RunOptions,
+    mut model: Model,
+    settings: RunSettings,
+    origin: String,
+    record: RunRecord,
+    out: &std::path::Path,
+    t_start: Instant,
+    mut phases: Phases,
+    log: &mut Log,
+) -> Result<RunOutcome> {
+    let _ = opts;
+    let scene = settings.name.clone();
     let analysis = &settings.analysis;
     let mut writer = ResultsWriter::create(
         comm,
-        &out,
+        out,
         &model,
         &scene,
         settings.units.describe(),
@@ -314,7 +398,6 @@ pub fn run(comm: &dyn Comm, opts: &RunOptions) -> Result<RunOutcome> {
     let end_time = analysis.end_time;
     let kind = analysis.kind;
     let n_steps = nominal_steps(analysis);
-    let quiet = opts.quiet || comm.rank() != 0;
     // Explicit runs: the time step from the mesh (an input error if the deck's is unstable).
     let explicit_dt = if kind == AnalysisKind::Explicit {
         Some(crate::solve::time::explicit::explicit_time_step(
@@ -327,33 +410,50 @@ pub fn run(comm: &dyn Comm, opts: &RunOptions) -> Result<RunOutcome> {
         AnalysisKind::Explicit => "central-difference".to_string(),
         _ => nopts.kind.name().to_string(),
     };
-    if !quiet {
-        println!(
-            "alfe: scene {scene} on {} rank(s) with {method}{}: {} nodes, {} elements, {} unknowns, {} nominal steps",
-            comm.size(),
-            match kind {
-                AnalysisKind::Explicit => String::new(),
-                _ => format!(" ({})", nopts.preconditioner.name()),
-            },
-            model.mesh.n_nodes_global,
-            model.mesh.n_elems_global,
-            model.dofs.dofs.global_len(),
-            n_steps
-        );
-        if let Some((dt, st)) = &explicit_dt {
-            println!(
-                "explicit: stable step {:.4e} (L_e = {:.4e}, c_d = {:.4e}), using {dt:.4e}, {} steps",
-                st.dt,
-                st.length,
-                st.wave_speed,
-                (end_time / dt).ceil()
-            );
-        }
+    log.line(&format!(
+        "alfe: scene {scene} on {} rank(s) with {method}{}: {} nodes, {} elements, {} unknowns, {} nominal steps",
+        comm.size(),
+        match kind {
+            AnalysisKind::Explicit => String::new(),
+            _ => format!(" ({})", nopts.preconditioner.name()),
+        },
+        model.mesh.n_nodes_global,
+        model.mesh.n_elems_global,
+        model.dofs.dofs.global_len(),
+        n_steps
+    ));
+    if let Some((dt, st)) = &explicit_dt {
+        log.line(&format!(
+            "explicit: stable step {:.4e} (L_e = {:.4e}, c_d = {:.4e}), using {dt:.4e}, {} steps",
+            st.dt,
+            st.length,
+            st.wave_speed,
+            (end_time / dt).ceil()
+        ));
     }
+    let mut progress =
+        progress::Progress::new(std::mem::replace(log, Log::silent()), &model, 0.0, end_time);
+    let mut iters = IterationLog::open(
+        out,
+        opts.iterations || settings.output.iterations,
+        comm.rank() == 0,
+    );
+    // The attempts at a converged step, its failed ones first (`iterations.csv`).
+    let mut t_prev = 0.0;
+    let mut log_attempts = |rec: &StepRecord| {
+        let ok = Attempt {
+            t_start: t_prev,
+            t_end: rec.time,
+            stats: rec.stats.clone(),
+        };
+        let all: Vec<&Attempt> = rec.failed.iter().chain(std::iter::once(&ok)).collect();
+        iters.step(rec.step, &all, true);
+        t_prev = rec.time;
+    };
     let mut u = Vec::new();
     let mut records = Vec::new();
     let set_names = model.reaction_sets.clone();
-    let totals: RunTotals = if kind != AnalysisKind::Static {
+    let totals: Result<RunTotals> = if kind != AnalysisKind::Static {
         let interval = settings.output.interval;
         let mut clock = OutputClock::new(interval, end_time);
         let mut state = DynState::default();
@@ -361,20 +461,10 @@ pub fn run(comm: &dyn Comm, opts: &RunOptions) -> Result<RunOutcome> {
             let fields = clock.due(rec.time);
             let nodal: [(&str, &[f64]); 2] = [("velocity", &s.v), ("acceleration", &s.a)];
             writer.step_with(comm, rec, &s.u, m, fields, &nodal)?;
+            log_attempts(rec);
             records.push(rec.clone());
-            if !quiet && fields {
-                let e = rec.energies.unwrap_or_default();
-                println!(
-                    "step {:>6}  t={:<10.4e} ({:>3.0}%)  its {:>2}  KE={:.4e}  W_int={:.4e}  W_ext={:.4e}  balance={:.1e}",
-                    rec.step,
-                    rec.time,
-                    100.0 * rec.time / end_time,
-                    rec.stats.iterations,
-                    e.kinetic,
-                    e.internal,
-                    e.external,
-                    e.balance
-                );
+            if fields {
+                progress.dynamic_step(rec, &set_names);
             }
             Ok(())
         };
@@ -387,8 +477,8 @@ pub fn run(comm: &dyn Comm, opts: &RunOptions) -> Result<RunOutcome> {
                 *dt,
                 stable,
                 &mut observe,
-            )?,
-            None => run_implicit(comm, &mut model, &mut state, analysis, nopts, &mut observe)?,
+            ),
+            None => run_implicit(comm, &mut model, &mut state, analysis, nopts, &mut observe),
         };
         u = state.u;
         t
@@ -421,34 +511,17 @@ pub fn run(comm: &dyn Comm, opts: &RunOptions) -> Result<RunOutcome> {
                     None => rec.step % every == 0 || rec.time >= end_time,
                 };
                 writer.step(comm, rec, u, m, fields)?;
+                log_attempts(rec);
                 records.push(rec.clone());
-                if !quiet {
-                    let reac = set_names
-                        .iter()
-                        .zip(&rec.reactions)
-                        .map(|(n, f)| format!(" {n}=({:.4e}, {:.4e}, {:.4e})", f[0], f[1], f[2]))
-                        .collect::<String>();
-                    let retry = if rec.retries > 0 {
-                        format!("  retries {}", rec.retries)
-                    } else {
-                        String::new()
-                    };
-                    println!(
-                "step {:>4}  t={:<10.4e} ({:>3.0}%)  {} {:>2}  gmres {:>4}  |r|/f={:.2e}  {:.2}s{retry}{reac}",
-                rec.step,
-                rec.time,
-                100.0 * rec.time / end_time,
-                nopts.kind.name(),
-                rec.stats.iterations,
-                rec.stats.linear_iterations,
-                rec.stats.residual_history.last().copied().unwrap_or(0.0),
-                rec.wall_seconds
-            );
-                }
+                progress.static_step(rec, nopts.kind.name(), &set_names);
                 Ok(())
             },
-        )?
+        )
     };
+    *log = progress.log;
+    let totals = totals?;
+    let failed: Vec<&Attempt> = totals.failed_last.iter().collect();
+    iters.step(records.last().map_or(0, |r| r.step) + 1, &failed, false);
     phases.assembly = totals.seconds_assembly;
     phases.linear_solve = totals.seconds_linear;
     phases.output = writer.seconds;
@@ -524,6 +597,7 @@ pub fn run(comm: &dyn Comm, opts: &RunOptions) -> Result<RunOutcome> {
         partition: origin,
         message: message.clone(),
         output_dir: out.display().to_string(),
+        run: record,
     };
     drop(writer);
     let r = if comm.rank() == 0 {
