@@ -124,6 +124,14 @@ struct RunArgs {
     /// iterations.csv.
     #[arg(long)]
     iterations: bool,
+    /// Go on from an earlier run's output directory (its restart files, written at every
+    /// step that writes fields), with its deck.toml unless a deck is given; results go to
+    /// DIR-restart unless --out says otherwise.
+    #[arg(long, value_name = "DIR")]
+    restart: Option<PathBuf>,
+    /// End the run after this step, as if interrupted (it can go on with --restart).
+    #[arg(long, value_name = "STEP")]
+    stop_after: Option<usize>,
 }
 
 #[derive(ValueEnum, Clone, Copy, Debug)]
@@ -233,15 +241,22 @@ fn main_inner(comm: &dyn Comm, raw: Vec<String>) -> Result<()> {
     };
     match cli.command {
         Command::Run(a) => {
+            let deck = match (a.target, &a.restart) {
+                (Some(t), _) => t,
+                (None, Some(dir)) => dir.join("deck.toml").display().to_string(),
+                (None, None) => alfe::scene::DEFAULT_SCENE.to_string(),
+            };
             let opts = RunOptions {
                 contact: a.contact.map(ContactArg::method),
-                target: target(a.target),
+                target: deck,
                 out: a.out,
                 partitions: a.partitions,
                 repartition: a.repartition,
                 quiet: a.quiet,
                 solver: a.solver.map(SolverArg::kind),
                 iterations: a.iterations,
+                restart: a.restart,
+                stop_after: a.stop_after,
             };
             let s = app::run(comm, &opts)?.summary;
             say(&s.headline());

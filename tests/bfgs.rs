@@ -40,6 +40,8 @@ fn solve_with(
         quiet: true,
         solver: None,
         iterations: false,
+        restart: None,
+        stop_after: None,
     };
     let Setup { mut model, run, .. } = setup(comm, &ro, &mut Phases::default()).unwrap();
     let mut opts = run.solver.clone();
@@ -53,9 +55,10 @@ fn solve_with(
         &mut u,
         &run.analysis,
         &opts,
-        &mut |rec, _, _| {
+        None,
+        &mut |rec, _, _, _| {
             steps.push(rec.clone());
-            Ok(())
+            Ok(alfe::solve::stepping::Flow::Continue)
         },
     )
     .unwrap();

@@ -101,6 +101,8 @@ fn run_in(name: &str, text: &str, contact: Option<ContactMethod>) -> (RunOutcome
         quiet: true,
         solver: None,
         iterations: false,
+        restart: None,
+        stop_after: None,
     };
     let o = run(&SerialComm, &opts).unwrap_or_else(|e| panic!("{name}: {e}"));
     (o, out)

@@ -202,6 +202,8 @@ fn a_busy_output_directory_is_refused() {
         quiet: true,
         solver: None,
         iterations: false,
+        restart: None,
+        stop_after: None,
     };
     let e = alfe::app::run(&alfe::parallel::SerialComm, &opts)
         .err()

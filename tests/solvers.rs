@@ -32,6 +32,8 @@ fn run_with(name: &str, text: &str, solver: SolverKind) -> alfe::app::RunOutcome
         quiet: true,
         solver: Some(solver),
         iterations: false,
+        restart: None,
+        stop_after: None,
     };
     alfe::app::run(&SerialComm, &opts).unwrap_or_else(|e| panic!("{name}: {e}"))
 }

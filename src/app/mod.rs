@@ -15,7 +15,7 @@ use crate::partition::{cache, quality};
 use crate::scene::{RunSettings, Scene};
 use crate::solve::nonlinear::SolverKind;
 use crate::solve::stepping::{run_static, RunTotals};
-use crate::solve::stepping::{Attempt, StepRecord};
+use crate::solve::stepping::{Attempt, Flow, Resume, StepRecord};
 use crate::solve::time::explicit::run_explicit;
 use crate::solve::time::implicit::run_implicit;
 use crate::solve::time::{DynState, OutputClock};
@@ -43,6 +43,28 @@ pub struct RunOptions {
     pub contact: Option<crate::contact::wall::ContactMethod>,
     /// Write `iterations.csv` (`--iterations`; also the deck's `[output] iterations`).
     pub iterations: bool,
+    /// Go on from the restart files of an earlier run's output directory.
+    pub restart: Option<PathBuf>,
+    /// End the run after this step (as if interrupted; resumable with `restart`).
+    pub stop_after: Option<usize>,
+}
+
+impl RunOptions {
+    /// Run `target` with the defaults of `alfe run TARGET`.
+    pub fn new(target: impl Into<String>) -> Self {
+        Self {
+            target: target.into(),
+            out: None,
+            partitions: PathBuf::from("partitions"),
+            repartition: false,
+            quiet: false,
+            solver: None,
+            contact: None,
+            iterations: false,
+            restart: None,
+            stop_after: None,
+        }
+    }
 }
 
 /// What a run leaves behind besides its files (also written to `summary.json`).
@@ -97,11 +119,34 @@ pub struct Summary {
     pub output_dir: String,
     /// Which alfe ran what, how and when (also the header of `deck.toml`).
     pub run: RunRecord,
+    /// A restart: the directory, step and time it went on from.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub restarted_from: Option<serde_json::Value>,
+    /// The run was stopped after a step on request (`--stop-after`).
+    pub stopped: bool,
 }
 
 impl Summary {
+    /// The number of the last step done (a restarted run counts from its start).
+    fn run_steps_end(&self) -> usize {
+        let before = self
+            .restarted_from
+            .as_ref()
+            .and_then(|r| r["step"].as_u64())
+            .unwrap_or(0) as usize;
+        before + self.steps
+    }
+
     /// The one line a finished run ends with.
     pub fn headline(&self) -> String {
+        if self.stopped {
+            return format!(
+                "alfe: stopped after step {} as asked ({:.2} s); go on with `alfe run --restart {}`",
+                self.run_steps_end(),
+                self.wall_time_s,
+                self.output_dir
+            );
+        }
         format!(
             "alfe: {} steps converged in {:.2} s ({} nonlinear, {} GMRES iterations); results in {}/ ({}.h5, {}.xmf, history.csv, summary.json, deck.toml, log.txt)",
             self.steps,
@@ -321,7 +366,7 @@ pub fn run(comm: &dyn Comm, opts: &RunOptions) -> Result<RunOutcome> {
     let record = RunRecord::now(&opts.target, comm.size());
     let mut phases = Phases::default();
     let Setup {
-        model,
+        mut model,
         run: mut settings,
         partition: origin,
         mut resolved,
@@ -330,10 +375,28 @@ pub fn run(comm: &dyn Comm, opts: &RunOptions) -> Result<RunOutcome> {
         .solver
         .preconditioner
         .resolve(comm.size(), model.dofs.dofs.global_len());
-    let out = opts
-        .out
-        .clone()
-        .unwrap_or_else(|| PathBuf::from("out").join(&settings.name));
+    let restart = match &opts.restart {
+        Some(dir) => Some(load_restart(comm, dir, &mut model, &settings)?),
+        None => None,
+    };
+    let out = match (&opts.out, &opts.restart) {
+        (Some(o), _) => o.clone(),
+        (None, Some(dir)) => PathBuf::from(format!("{}-restart", dir.display())),
+        (None, None) => PathBuf::from("out").join(&settings.name),
+    };
+    if let Some(dir) = &opts.restart {
+        let same = |a: &std::path::Path, b: &std::path::Path| {
+            std::fs::canonicalize(a)
+                .ok()
+                .is_some_and(|x| std::fs::canonicalize(b).ok() == Some(x))
+        };
+        if same(dir, &out) {
+            return Err(Error::input(format!(
+                "--out {}: a restart writes to another directory than the one it restarts from",
+                out.display()
+            )));
+        }
+    }
     // One run per output directory (rank 0 holds the lock until the run ends).
     let _lock = on_rank0(comm, || crate::output::lock::OutLock::acquire(&out))?;
     let mut log = Log::open(&out, comm.rank() == 0, opts.quiet);
@@ -357,7 +420,7 @@ pub fn run(comm: &dyn Comm, opts: &RunOptions) -> Result<RunOutcome> {
     });
     let res = written.and_then(|_| {
         execute(
-            comm, opts, model, settings, origin, record, &out, t_start, phases, &mut log,
+            comm, opts, model, settings, origin, record, &out, t_start, phases, &mut log, restart,
         )
     });
     match &res {
@@ -380,8 +443,8 @@ fn execute(
     t_start: Instant,
     mut phases: Phases,
     log: &mut Log,
+    restart: Option<Restart>,
 ) -> Result<RunOutcome> {
-    let _ = opts;
     let scene = settings.name.clone();
     let analysis = &settings.analysis;
     let mut writer = ResultsWriter::create(
@@ -431,15 +494,56 @@ fn execute(
             (end_time / dt).ceil()
         ));
     }
+    if restart.is_some() && kind == AnalysisKind::Explicit {
+        return Err(Error::input(
+            "--restart: explicit runs cannot be restarted (static and implicit ones can)",
+        ));
+    }
+    let t0 = restart.as_ref().map_or(0.0, |r| r.time);
+    if let Some(r) = &restart {
+        log.line(&format!(
+            "restart from {} after step {} (t = {})",
+            r.dir.display(),
+            r.step,
+            r.time
+        ));
+    }
     let mut progress =
-        progress::Progress::new(std::mem::replace(log, Log::silent()), &model, 0.0, end_time);
+        progress::Progress::new(std::mem::replace(log, Log::silent()), &model, t0, end_time);
+    let deck_print = crate::output::checkpoint::fingerprint(&settings.echo);
+    // A restart file after every step that writes fields (each rank its own).
+    let save = |rec: &StepRecord, u: &[f64], m: &Model, resume: &dyn Fn() -> Resume| {
+        crate::output::checkpoint::write(
+            comm,
+            out,
+            &crate::output::checkpoint::Checkpoint {
+                format: crate::output::checkpoint::FORMAT,
+                alfe: crate::VERSION.into(),
+                scene: scene.clone(),
+                deck: deck_print,
+                ranks: comm.size(),
+                rank: comm.rank(),
+                first_dof: m.dofs.dofs.start(),
+                n_dofs: u.len(),
+                step: rec.step,
+                time: rec.time,
+                u: u.to_vec(),
+                model: m.saved_state(),
+                resume: resume(),
+            },
+        )
+    };
+    let flow = |rec: &StepRecord| match opts.stop_after {
+        Some(n) if rec.step >= n => Flow::Stop,
+        _ => Flow::Continue,
+    };
     let mut iters = IterationLog::open(
         out,
         opts.iterations || settings.output.iterations,
         comm.rank() == 0,
     );
     // The attempts at a converged step, its failed ones first (`iterations.csv`).
-    let mut t_prev = 0.0;
+    let mut t_prev = t0;
     let mut log_attempts = |rec: &StepRecord| {
         let ok = Attempt {
             t_start: t_prev,
@@ -457,7 +561,15 @@ fn execute(
         let interval = settings.output.interval;
         let mut clock = OutputClock::new(interval, end_time);
         let mut state = DynState::default();
-        let mut observe = |rec: &StepRecord, s: &DynState, m: &Model| -> Result<()> {
+        if let Some(r) = &restart {
+            state.u = r.u.clone();
+            clock.skip_to(r.time);
+        }
+        let mut observe = |rec: &StepRecord,
+                           s: &DynState,
+                           m: &Model,
+                           resume: Option<&dyn Fn() -> Resume>|
+         -> Result<Flow> {
             let fields = clock.due(rec.time);
             let nodal: [(&str, &[f64]); 2] = [("velocity", &s.v), ("acceleration", &s.a)];
             writer.step_with(comm, rec, &s.u, m, fields, &nodal)?;
@@ -466,7 +578,10 @@ fn execute(
             if fields {
                 progress.dynamic_step(rec, &set_names);
             }
-            Ok(())
+            if let (true, Some(resume)) = (fields || flow(rec) == Flow::Stop, resume) {
+                save(rec, &s.u, m, resume)?;
+            }
+            Ok(flow(rec))
         };
         let t = match &explicit_dt {
             Some((dt, stable)) => run_explicit(
@@ -478,20 +593,32 @@ fn execute(
                 stable,
                 &mut observe,
             ),
-            None => run_implicit(comm, &mut model, &mut state, analysis, nopts, &mut observe),
+            None => run_implicit(
+                comm,
+                &mut model,
+                &mut state,
+                analysis,
+                nopts,
+                restart.as_ref().map(|r| &r.resume),
+                &mut observe,
+            ),
         };
         u = state.u;
         t
     } else {
         // (analysis step, increments of it so far)
         let mut stage_seen = (0usize, 0usize);
+        if let Some(r) = &restart {
+            u = r.u.clone();
+        }
         run_static(
             comm,
             &mut model,
             &mut u,
             analysis,
             nopts,
-            &mut |rec, u, m| {
+            restart.as_ref().map(|r| &r.resume),
+            &mut |rec, u, m, resume| {
                 // With analysis steps: every n-th increment of the step, and its last.
                 let fields = match analysis.stages.get(rec.stage) {
                     Some(st) => {
@@ -514,7 +641,10 @@ fn execute(
                 log_attempts(rec);
                 records.push(rec.clone());
                 progress.static_step(rec, nopts.kind.name(), &set_names);
-                Ok(())
+                if fields || flow(rec) == Flow::Stop {
+                    save(rec, u, m, resume)?;
+                }
+                Ok(flow(rec))
             },
         )
     };
@@ -598,6 +728,10 @@ fn execute(
         message: message.clone(),
         output_dir: out.display().to_string(),
         run: record,
+        restarted_from: restart.as_ref().map(|r| {
+            serde_json::json!({"dir": r.dir.display().to_string(), "step": r.step, "time": r.time})
+        }),
+        stopped: totals.stopped,
     };
     drop(writer);
     let r = if comm.rank() == 0 {
@@ -627,6 +761,51 @@ fn execute(
         u,
         model,
         steps: records,
+    })
+}
+
+/// Where a restarted run goes on from: the earlier run's directory, its last step and
+/// time, and this rank's solution and stepping state (the model's state is restored).
+struct Restart {
+    dir: PathBuf,
+    step: usize,
+    time: f64,
+    u: Vec<f64>,
+    resume: Resume,
+}
+
+/// Collective: read this rank's restart file from `dir`, check it was written by this
+/// deck on this partition, and restore the model's state from it.
+fn load_restart(
+    comm: &dyn Comm,
+    dir: &std::path::Path,
+    model: &mut Model,
+    settings: &RunSettings,
+) -> Result<Restart> {
+    let c = crate::output::checkpoint::read(comm, dir)?;
+    let mine = if c.scene != settings.name
+        || c.deck != crate::output::checkpoint::fingerprint(&settings.echo)
+    {
+        Some(format!(
+            "the restart files were written by another deck (scene `{}`); a restart needs the \
+             deck of the run, e.g. {}",
+            c.scene,
+            dir.join("deck.toml").display()
+        ))
+    } else if c.first_dof != model.dofs.dofs.start() || c.n_dofs != model.n_owned_dofs() {
+        Some("the restart files were written on another partition of the model".into())
+    } else {
+        model.restore_state(&c.model).err().map(|e| e.message)
+    };
+    if let Some(why) = comm.first_message(mine) {
+        return Err(Error::input(format!("--restart {}: {why}", dir.display())));
+    }
+    Ok(Restart {
+        dir: dir.to_path_buf(),
+        step: c.step,
+        time: c.time,
+        u: c.u,
+        resume: c.resume,
     })
 }
 
@@ -729,6 +908,9 @@ fn describe(def: &ModelDef, run: &RunSettings) -> String {
     s.push_str(&format!("  contributions: {}\n", def.contributions.len()));
     for c in &def.contributions {
         s.push_str(&format!("    {}\n", c.kind().describe()));
+        if let Some(more) = c.kind().initial_state(&m.coords) {
+            s.push_str(&format!("      {more}\n"));
+        }
     }
     s
 }

@@ -226,6 +226,24 @@ impl Body {
         self.u_old = self.u_new;
     }
 
+    /// The committed pose (ψ, Q, u: 15 values) for a restart file.
+    pub fn saved_state(&self) -> Vec<f64> {
+        let mut s = self.psi_old.to_vec();
+        s.extend(self.q_old.iter().flatten());
+        s.extend(self.u_old);
+        s
+    }
+
+    /// Take back [`Body::saved_state`]'s 15 values as the committed pose.
+    pub fn restore_state(&mut self, s: &[f64]) {
+        self.psi_old = [s[0], s[1], s[2]];
+        self.q_old = std::array::from_fn(|i| std::array::from_fn(|j| s[3 + 3 * i + j]));
+        self.u_old = [s[12], s[13], s[14]];
+        self.psi_new = self.psi_old;
+        self.q_new = self.q_old;
+        self.u_new = self.u_old;
+    }
+
     /// Where a body-fixed point (reference position X) is now.
     pub fn point(&self, x: [f64; 3]) -> [f64; 3] {
         let p0 = self.pose_of([0.0; 3], &ID);

@@ -234,6 +234,25 @@ pub trait Contribution {
     /// The last evaluation becomes the start of the next step.
     fn commit(&mut self) {}
 
+    /// Its committed state, flattened (a restart file keeps it): what `commit` keeps
+    /// between steps (material history, wall and pair memories, a body's pose). Empty
+    /// for contributions without state.
+    fn saved_state(&self) -> Vec<f64> {
+        Vec::new()
+    }
+    /// Take back a state from [`Contribution::saved_state`] as the committed one; `Err` if it
+    /// does not fit this contribution (another deck or partition).
+    fn restore_state(&mut self, s: &[f64]) -> Result<(), String> {
+        if s.is_empty() {
+            Ok(())
+        } else {
+            Err(format!(
+                "{} values for a contribution without state",
+                s.len()
+            ))
+        }
+    }
+
     /// After a step failed to converge: what this contribution saw go wrong in it, in an
     /// analyst's words (a wall: nodes that kept switching between stick and slip), or
     /// `None`.

@@ -33,6 +33,11 @@ pub trait ContributionKind {
     fn name(&self) -> &str;
     /// One line for `alfe check`.
     fn describe(&self) -> String;
+    /// What `alfe check` adds about its state at t = 0 given the mesh's coordinates (a
+    /// wall: its tracked nodes' initial gaps), if anything.
+    fn initial_state(&self, _coords: &[[f64; 3]]) -> Option<String> {
+        None
+    }
     /// The nodes it acts on (global numbers; for `alfe check`).
     fn nodes(&self) -> Vec<usize> {
         Vec::new()

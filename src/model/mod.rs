@@ -459,6 +459,30 @@ impl Model {
         comm.first_message((!mine.is_empty()).then(|| mine.join("; ")))
     }
 
+    /// Every contribution's committed state (the solid elements first): what a restart
+    /// file keeps besides the solution.
+    pub fn saved_state(&self) -> Vec<Vec<f64>> {
+        self.each_ref().map(|c| c.saved_state()).collect()
+    }
+
+    /// Take back [`Model::saved_state`] (this rank's); `Err` names the contribution that does
+    /// not fit.
+    pub fn restore_state(&mut self, s: &[Vec<f64>]) -> Result<()> {
+        let n = 1 + self.contributions.len();
+        if s.len() != n {
+            return Err(Error::input(format!(
+                "the restart file has the state of {} contributions, the model {n}",
+                s.len()
+            )));
+        }
+        for (c, v) in self.each().zip(s) {
+            let name = c.name().to_string();
+            c.restore_state(v)
+                .map_err(|why| Error::input(format!("restart state of {name}: {why}")))?;
+        }
+        Ok(())
+    }
+
     /// Accept the state of the last converged evaluation.
     pub fn commit(&mut self) {
         for c in self.each() {

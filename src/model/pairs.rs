@@ -531,6 +531,41 @@ impl Contribution for Pairs {
         Ok(())
     }
 
+    /// `[started, t, s, locked, s_lock, d0 (3 n), d_old (3 n), ft_old (3 n)]`.
+    fn saved_state(&self) -> Vec<f64> {
+        let mut s = vec![
+            f64::from(u8::from(self.started)),
+            self.t_new,
+            self.s_new,
+            f64::from(u8::from(self.s_lock.is_some())),
+            self.s_lock.unwrap_or(0.0),
+        ];
+        for v in [&self.d0, &self.d_old, &self.ft_old] {
+            s.extend(v.iter().flatten());
+        }
+        s
+    }
+
+    fn restore_state(&mut self, s: &[f64]) -> Result<(), String> {
+        let n = self.d0.len();
+        if s.len() != 5 + 9 * n {
+            return Err(format!("{} values for {} expected", s.len(), 5 + 9 * n));
+        }
+        self.started = s[0] != 0.0;
+        self.t_new = s[1];
+        self.s_new = s[2];
+        self.s_lock = (s[3] != 0.0).then_some(s[4]);
+        for j in 0..n {
+            let at = |o: usize| [s[o + 3 * j], s[o + 3 * j + 1], s[o + 3 * j + 2]];
+            self.d0[j] = at(5);
+            self.d_old[j] = at(5 + 3 * n);
+            self.ft_old[j] = at(5 + 6 * n);
+        }
+        self.d_new.copy_from_slice(&self.d_old);
+        self.ft_new.copy_from_slice(&self.ft_old);
+        Ok(())
+    }
+
     fn commit(&mut self) {
         self.d_old.copy_from_slice(&self.d_new);
         self.ft_old.copy_from_slice(&self.ft_new);

@@ -386,6 +386,23 @@ impl Contribution for Solids {
         self.state_old.copy_from_slice(&self.state_new);
     }
 
+    fn saved_state(&self) -> Vec<f64> {
+        self.state_old.clone()
+    }
+
+    fn restore_state(&mut self, s: &[f64]) -> Result<(), String> {
+        if s.len() != self.state_old.len() {
+            return Err(format!(
+                "{} history values for {} expected",
+                s.len(),
+                self.state_old.len()
+            ));
+        }
+        self.state_old.copy_from_slice(s);
+        self.state_new.copy_from_slice(s);
+        Ok(())
+    }
+
     /// Pressure unknowns are algebraic: an explicit step cannot solve for them (the deck
     /// refuses the combination; this is the backstop).
     fn start_explicit(&mut self) -> Result<(), String> {

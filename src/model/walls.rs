@@ -67,6 +67,35 @@ pub struct WallDef {
 }
 
 impl ContributionKind for WallDef {
+    /// The tracked nodes' gaps at t = 0: the smallest and largest, and how many touch.
+    fn initial_state(&self, coords: &[[f64; 3]]) -> Option<String> {
+        let s = self.shape.build();
+        let pose = self.motion.pose(0.0);
+        let gaps: Vec<f64> = self
+            .nodes
+            .iter()
+            .filter_map(|&n| {
+                crate::contact::wall::project(s.as_ref(), &pose, &pose, coords[n], None)
+            })
+            .map(|p| p.gap)
+            .collect();
+        if gaps.is_empty() {
+            return Some("no tracked node can reach it at t = 0".into());
+        }
+        let (lo, hi) = gaps
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &g| {
+                (a.min(g), b.max(g))
+            });
+        let size = coords.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
+        let touching = gaps.iter().filter(|&&g| g <= 1e-9 * size.max(1.0)).count();
+        Some(format!(
+            "initial gaps {lo:.4e} to {hi:.4e} ({touching} of {} nodes touching, {} out of reach)",
+            self.nodes.len(),
+            self.nodes.len() - gaps.len()
+        ))
+    }
+
     fn kind_name(&self) -> &'static str {
         if self.body.is_some() {
             "entity"
@@ -652,6 +681,48 @@ impl Contribution for Wall {
         self.body
             .as_ref()
             .map_or(Vec::new(), |b| b.initial_velocities(dofs))
+    }
+
+    /// `[t_old, x_old (3 n), n_old (4 n: present, normal), ft_old (3 n), body (15)]`.
+    fn saved_state(&self) -> Vec<f64> {
+        let mut s = vec![self.t_old];
+        s.extend(self.x_old.iter().flatten());
+        for n in &self.n_old {
+            match n {
+                Some(v) => s.extend([1.0, v[0], v[1], v[2]]),
+                None => s.extend([0.0; 4]),
+            }
+        }
+        s.extend(self.ft_old.iter().flatten());
+        if let Some(b) = &self.body {
+            s.extend(b.saved_state());
+        }
+        s
+    }
+
+    fn restore_state(&mut self, s: &[f64]) -> Result<(), String> {
+        let n = self.x_old.len();
+        let want = 1 + 10 * n + if self.body.is_some() { 15 } else { 0 };
+        if s.len() != want {
+            return Err(format!("{} values for {want} expected", s.len()));
+        }
+        self.t_old = s[0];
+        self.t_new = s[0];
+        let three = |o: usize, j: usize| [s[o + 3 * j], s[o + 3 * j + 1], s[o + 3 * j + 2]];
+        for j in 0..n {
+            self.x_old[j] = three(1, j);
+            let o = 1 + 3 * n + 4 * j;
+            self.n_old[j] = (s[o] != 0.0).then(|| [s[o + 1], s[o + 2], s[o + 3]]);
+            self.ft_old[j] = three(1 + 7 * n, j);
+        }
+        self.x_new.copy_from_slice(&self.x_old);
+        self.n_new.copy_from_slice(&self.n_old);
+        self.ft_new.copy_from_slice(&self.ft_old);
+        self.flips.iter_mut().for_each(|f| *f = 0);
+        if let Some(b) = &mut self.body {
+            b.restore_state(&s[1 + 10 * n..]);
+        }
+        Ok(())
     }
 
     /// Stick/slip cycling: nodes that switched between stick and slip at least

@@ -8,6 +8,15 @@
 
 use super::{Analysis, Stage};
 
+/// What a restart needs of the controller: where the stepping stands.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct ControlState {
+    pub t_done: f64,
+    pub dt: f64,
+    pub steps: usize,
+    pub stage: usize,
+}
+
 #[derive(Debug, Clone)]
 pub struct StepControl {
     pub min_step: f64,
@@ -66,6 +75,25 @@ impl StepControl {
         }
     }
 
+    /// Where the stepping stands (after an accepted step: for a restart).
+    pub fn state(&self) -> ControlState {
+        ControlState {
+            t_done: self.t_done,
+            dt: self.dt,
+            steps: self.steps,
+            stage: self.stage,
+        }
+    }
+
+    /// Continue from `s` (a restart).
+    pub fn resume(&mut self, s: &ControlState) {
+        self.enter(s.stage);
+        self.t_done = s.t_done;
+        self.dt = s.dt;
+        self.steps = s.steps;
+        self.retries = 0;
+    }
+
     /// The stage the next increment belongs to (0 without stages).
     pub fn stage(&self) -> usize {
         self.stage
@@ -83,7 +111,7 @@ impl StepControl {
         if self.t_done >= self.end * (1.0 - 1e-12) {
             return None;
         }
-        let mut t = self.t_done + self.dt;
+        let mut t = snap(self.t_done + self.dt, self.end);
         if t > self.end * (1.0 - 1e-9) || self.end - t < 1e-3 * self.dt {
             t = self.end;
         }
@@ -133,6 +161,32 @@ impl StepControl {
     }
 }
 
+/// `t` to 12 significant digits of the end time's decade, so sums of steps land on the
+/// times a user reads (0.3, not 0.30000000000000004; issue 16): the nearest multiple of
+/// 10^(e − 12) with 10^e ≥ |end|, computed as an integer over an exact power of ten.
+pub fn snap(t: f64, end: f64) -> f64 {
+    let e = end.abs().max(f64::MIN_POSITIVE).log10().ceil() as i32;
+    if !(-280..=280).contains(&e) {
+        return t;
+    }
+    // 10^(12 − e) is exact as a double for 12 − e ≤ 22; beyond, multiply by its inverse.
+    let k = 12 - e;
+    if (0..=22).contains(&k) {
+        let s = 10f64.powi(k);
+        let q = (t * s).round();
+        if q.abs() < 9.0e15 {
+            return q / s;
+        }
+    } else if (-22..0).contains(&k) {
+        let s = 10f64.powi(-k);
+        let q = (t / s).round();
+        if q.abs() < 9.0e15 {
+            return q * s;
+        }
+    }
+    t
+}
+
 /// The pseudo-times of the steps at a constant step `dt` (for reports).
 pub fn step_times(end: f64, dt: f64) -> Vec<f64> {
     let n = ((end / dt) - 1e-9).ceil().max(1.0) as usize;
@@ -161,6 +215,46 @@ mod tests {
             stops: Vec::new(),
             stages: Vec::new(),
         }
+    }
+
+    /// Steps of 0.1 land on 0.3 and 0.7 exactly as a user writes them; steps that are
+    /// not decimal (cuts by half) keep their binary values; any end time's decade.
+    #[test]
+    fn step_times_do_not_drift() {
+        let mut c = StepControl::new(&analysis(0.1, 0.001, 0.1), 20);
+        let mut times = Vec::new();
+        while let Some((_, t)) = c.next() {
+            c.accept(t, 10);
+            times.push(t);
+        }
+        assert_eq!(times[2], 0.3);
+        assert_eq!(times[6], 0.7);
+        assert_eq!(times.len(), 10);
+        assert_eq!(snap(0.1 + 0.2, 1.0), 0.3);
+        assert_eq!(snap(0.125, 1.0), 0.125);
+        assert_eq!(snap(3.0 * 0.1e-3, 2e-3), 0.3e-3);
+        assert_eq!(snap(7.0 * 0.1e6, 1e6), 0.7e6);
+        assert_eq!(snap(1.0 / 3.0, 1.0), 0.333333333333);
+    }
+
+    /// A controller resumed from another's state takes the same steps from there on.
+    #[test]
+    fn a_resumed_controller_continues_alike() {
+        let a = analysis(0.2, 0.01, 0.4);
+        let mut c = StepControl::new(&a, 20);
+        for _ in 0..3 {
+            let (_, t) = c.next().unwrap();
+            c.accept(t, 2);
+        }
+        let mut d = StepControl::new(&a, 20);
+        d.resume(&c.state());
+        assert_eq!(d.state(), c.state());
+        while let Some((t0, t1)) = c.next() {
+            assert_eq!(d.next(), Some((t0, t1)));
+            c.accept(t1, 2);
+            d.accept(t1, 2);
+        }
+        assert_eq!(d.next(), None);
     }
 
     #[test]

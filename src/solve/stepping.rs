@@ -6,7 +6,7 @@
 use crate::linalg::matrix::DistMatrix;
 use crate::model::Model;
 use crate::parallel::Comm;
-use crate::solve::control::StepControl;
+use crate::solve::control::{ControlState, StepControl};
 use crate::solve::nonlinear::{
     solve, NonlinearOptions, NonlinearProblem, Preconditioning, SolveStats,
 };
@@ -68,6 +68,8 @@ pub struct Attempt {
 pub struct RunTotals {
     pub steps: usize,
     pub converged: bool,
+    /// The observer stopped the run (`Flow::Stop`) before the end.
+    pub stopped: bool,
     pub nonlinear_iterations: usize,
     pub linear_iterations: usize,
     pub residual_evaluations: usize,
@@ -122,19 +124,45 @@ impl RunTotals {
     }
 }
 
-/// Called with every converged step, its solution and the model (output, progress).
-pub type StepObserver<'a> = dyn FnMut(&StepRecord, &[f64], &Model) -> Result<()> + 'a;
+/// Where a run resumes from a restart file (`output::checkpoint`): the step controller,
+/// the static predictor's last increment, and implicit dynamics' state. With the
+/// solution and the contributions' committed states, the run goes on as if it had not
+/// stopped (a lagged preconditioner, `[solver.linear] lag`, starts fresh).
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
+pub struct Resume {
+    pub control: ControlState,
+    pub last_increment: Option<(Vec<f64>, f64)>,
+    pub dynamic: Option<crate::solve::time::DynResume>,
+}
 
-/// Run the static analysis; `on_step` sees every converged step with the solution.
+/// What an observer wants after a step: go on, or stop here (`alfe run --stop-after`:
+/// the run ends as if interrupted, resumable from its restart file).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Flow {
+    Continue,
+    Stop,
+}
+
+/// Called with every converged step, its solution, the model (output, progress) and
+/// how to resume after it (built only when asked for).
+pub type StepObserver<'a> =
+    dyn FnMut(&StepRecord, &[f64], &Model, &dyn Fn() -> Resume) -> Result<Flow> + 'a;
+
+/// Run the static analysis; `on_step` sees every converged step with the solution. With
+/// `resume` it goes on from a restart: `u` holds its solution and the model its state.
 pub fn run_static(
     comm: &dyn Comm,
     model: &mut Model,
     u: &mut Vec<f64>,
     analysis: &Analysis,
     opts: &NonlinearOptions,
+    resume: Option<&Resume>,
     on_step: &mut StepObserver,
 ) -> Result<RunTotals> {
     let mut ctl = StepControl::new(analysis, opts.max_iterations);
+    if let Some(r) = resume {
+        ctl.resume(&r.control);
+    }
     let n = model.n_owned_dofs();
     u.resize(n, 0.0);
     let mut r = vec![0.0; n];
@@ -146,7 +174,7 @@ pub fn run_static(
     let mut tot = RunTotals::default();
     let mut t0 = Instant::now();
     // The last converged increment and its step, for the predictor.
-    let mut last: Option<(Vec<f64>, f64)> = None;
+    let mut last: Option<(Vec<f64>, f64)> = resume.and_then(|r| r.last_increment.clone());
     let mut failed = false;
     // Failed attempts at the current step.
     let mut pending: Vec<Attempt> = Vec::new();
@@ -214,7 +242,15 @@ pub fn run_static(
             columns: model.column_values(comm, u, t),
             failed: std::mem::take(&mut pending),
         };
-        on_step(&rec, u, model)?;
+        let here = || Resume {
+            control: ctl.state(),
+            last_increment: last.clone(),
+            dynamic: None,
+        };
+        if on_step(&rec, u, model, &here)? == Flow::Stop {
+            tot.stopped = true;
+            return Ok(tot);
+        }
         t0 = Instant::now();
     }
     tot.converged = true;

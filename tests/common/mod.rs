@@ -41,6 +41,8 @@ pub fn try_run_deck(name: &str, text: &str) -> alfe::Result<RunOutcome> {
         quiet: true,
         solver: None,
         iterations: false,
+        restart: None,
+        stop_after: None,
     };
     run(&SerialComm, &opts)
 }

@@ -12,7 +12,7 @@
 use crate::parallel::Comm;
 
 /// The energies after a step (history columns).
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Energies {
     pub kinetic: f64,
     pub internal: f64,
@@ -20,8 +20,8 @@ pub struct Energies {
     pub balance: f64,
 }
 
-/// Running sums and the forces of the last state.
-#[derive(Debug, Clone)]
+/// Running sums and the forces of the last state (kept in a restart file as is).
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub struct EnergyAccount {
     ke0: f64,
     w_int: f64,

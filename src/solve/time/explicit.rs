@@ -124,6 +124,7 @@ pub fn run_explicit(
         },
         state,
         model,
+        None,
     )?;
     let MassMatrix::Lumped(m) = &mass else {
         unreachable!()
@@ -210,7 +211,10 @@ pub fn run_explicit(
             columns: model.column_values(comm, &state.u, t1),
             failed: Vec::new(),
         };
-        on_step(&rec, state, model)?;
+        if on_step(&rec, state, model, None)? == crate::solve::stepping::Flow::Stop {
+            tot.stopped = true;
+            return Ok(tot);
+        }
         t = t1;
         t0 = Instant::now();
     }

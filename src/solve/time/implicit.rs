@@ -20,7 +20,7 @@ use crate::model::Model;
 use crate::parallel::Comm;
 use crate::solve::control::StepControl;
 use crate::solve::nonlinear::{solve, NonlinearOptions, NonlinearProblem, Preconditioning};
-use crate::solve::stepping::{Attempt, RunTotals, StepRecord};
+use crate::solve::stepping::{Attempt, Flow, Resume, RunTotals, StepRecord};
 use crate::solve::{Analysis, MassKind, Scheme};
 use crate::{Error, Result};
 use std::time::Instant;
@@ -140,6 +140,7 @@ pub fn run_implicit(
     state: &mut DynState,
     analysis: &Analysis,
     opts: &NonlinearOptions,
+    resume: Option<&Resume>,
     on_step: &mut DynObserver,
 ) -> Result<RunTotals> {
     let p = scheme_params(analysis);
@@ -153,75 +154,25 @@ pub fn run_implicit(
     }
     let mut tot = RunTotals::default();
     let t_start = Instant::now();
-
-    // Initial state: u = g(0) on prescribed dofs, v from the deck (ġ(0) on prescribed
-    // dofs), a from M a = f_ext − f_int on the free dofs (g̈(0) on prescribed ones).
-    let h = 1e-6 * analysis.step;
-    let motion = prescribed_motion(model, 0.0, h);
-    state.u = vec![0.0; n];
-    state.v = model.initial_velocity();
-    for &(d, g, gd, _) in &motion {
-        state.u[d] = g;
-        state.v[d] = gd;
-    }
-    let mut fi = vec![0.0; n];
-    let mut fe = vec![0.0; n];
-    model.forces(comm, &state.u, 0.0, &mut fi, &mut fe)?;
-    let rhs: Vec<f64> = (0..n).map(|i| fe[i] - fi[i]).collect();
-    state.a = vec![0.0; n];
     // Multipliers, reference points and massless body DOFs carry no mass: their
     // "acceleration" is held at zero.
     let mults = model.algebraic_dofs();
-    let mut a_pres: Vec<(usize, f64)> = motion.iter().map(|m| (m.0, m.3)).collect();
-    a_pres.extend(mults.iter().map(|&d| (d, 0.0)));
+    let mut fi = vec![0.0; n];
+    let mut fe = vec![0.0; n];
     let mut r = vec![0.0; n];
-    let st0 = {
-        let mut prob = MassProblem {
-            model,
-            mass: &mass,
-            rhs: &rhs,
-        };
-        solve(
-            comm,
-            &mut prob,
-            &mut state.a,
-            &mut r,
-            &a_pres,
-            &mut k,
-            &mut pc,
-            opts,
-        )?
+    let (mut energy, mut r_old) = match resume.and_then(|x| x.dynamic.as_ref().map(|d| (x, d))) {
+        Some((x, d)) => {
+            // A restart: the caller set u and the model's state; the rest is here.
+            ctl.resume(&x.control);
+            state.v = d.v.clone();
+            state.a = d.a.clone();
+            (d.energy.clone(), d.r_old.clone())
+        }
+        None => initial_state(
+            comm, model, state, analysis, opts, &mass, &mults, &mut k, &mut pc, &mut tot, &mut fi,
+            &mut fe, &mut r, t_start, on_step,
+        )?,
     };
-    tot.add(&st0);
-    pc.invalidate();
-    if !st0.converged {
-        return Err(Error::runtime(format!(
-            "initial acceleration M a₀ = f_ext − f_int did not converge: {}",
-            st0.reason
-        )));
-    }
-    let (react, g) = support_forces(comm, model, &mass, &state.a, &fi, &fe);
-    let mv = momentum(comm, model, &mass, &state.v);
-    let ke0 = 0.5 * comm.dot(&state.v, &mv);
-    let mut energy = EnergyAccount::new(fi.clone(), g, ke0);
-    let mut r_old: Vec<f64> = (0..n).map(|i| fi[i] - fe[i]).collect();
-    on_step(
-        &StepRecord {
-            step: 0,
-            time: 0.0,
-            stage: 0,
-            stats: st0,
-            retries: 0,
-            reactions: model.reactions(comm, &react),
-            wall_seconds: t_start.elapsed().as_secs_f64(),
-            displacements: model.mean_displacements(comm, &state.u),
-            energies: Some(energy.current),
-            columns: model.column_values(comm, &state.u, 0.0),
-            failed: Vec::new(),
-        },
-        state,
-        model,
-    )?;
 
     let mut trial = vec![0.0; n];
     let mut t0 = Instant::now();
@@ -322,9 +273,100 @@ pub fn run_implicit(
             columns: model.column_values(comm, &state.u, t1),
             failed: std::mem::take(&mut pending),
         };
-        on_step(&rec, state, model)?;
+        let here = || Resume {
+            control: ctl.state(),
+            last_increment: None,
+            dynamic: Some(super::DynResume {
+                v: state.v.clone(),
+                a: state.a.clone(),
+                r_old: r_old.clone(),
+                energy: energy.clone(),
+            }),
+        };
+        if on_step(&rec, state, model, Some(&here))? == Flow::Stop {
+            tot.stopped = true;
+            return Ok(tot);
+        }
         t0 = Instant::now();
     }
     tot.converged = true;
     Ok(tot)
+}
+
+/// The state at t = 0 (u = g(0) on prescribed dofs, v from the deck, a from
+/// M a = f_ext − f_int) and its energy account and residual, reported as step 0.
+#[allow(clippy::too_many_arguments)]
+fn initial_state(
+    comm: &dyn Comm,
+    model: &mut Model,
+    state: &mut DynState,
+    analysis: &Analysis,
+    opts: &NonlinearOptions,
+    mass: &MassMatrix,
+    mults: &[usize],
+    k: &mut DistMatrix,
+    pc: &mut Preconditioning,
+    tot: &mut RunTotals,
+    fi: &mut [f64],
+    fe: &mut [f64],
+    r: &mut [f64],
+    t_start: Instant,
+    on_step: &mut DynObserver,
+) -> Result<(EnergyAccount, Vec<f64>)> {
+    let n = model.n_owned_dofs();
+    // Initial state: u = g(0) on prescribed dofs, v from the deck (ġ(0) on prescribed
+    // dofs), a from M a = f_ext − f_int on the free dofs (g̈(0) on prescribed ones).
+    let h = 1e-6 * analysis.step;
+    let motion = prescribed_motion(model, 0.0, h);
+    state.u = vec![0.0; n];
+    state.v = model.initial_velocity();
+    for &(d, g, gd, _) in &motion {
+        state.u[d] = g;
+        state.v[d] = gd;
+    }
+    model.forces(comm, &state.u, 0.0, fi, fe)?;
+    let rhs: Vec<f64> = (0..n).map(|i| fe[i] - fi[i]).collect();
+    state.a = vec![0.0; n];
+    let mut a_pres: Vec<(usize, f64)> = motion.iter().map(|m| (m.0, m.3)).collect();
+    a_pres.extend(mults.iter().map(|&d| (d, 0.0)));
+    let st0 = {
+        let mut prob = MassProblem {
+            model,
+            mass,
+            rhs: &rhs,
+        };
+        solve(comm, &mut prob, &mut state.a, r, &a_pres, k, pc, opts)?
+    };
+    tot.add(&st0);
+    pc.invalidate();
+    if !st0.converged {
+        return Err(Error::runtime(format!(
+            "initial acceleration M a₀ = f_ext − f_int did not converge: {}",
+            st0.reason
+        )));
+    }
+    let (react, g) = support_forces(comm, model, mass, &state.a, fi, fe);
+    let mv = momentum(comm, model, mass, &state.v);
+    let ke0 = 0.5 * comm.dot(&state.v, &mv);
+    let energy = EnergyAccount::new(fi.to_vec(), g, ke0);
+    let r_old: Vec<f64> = (0..n).map(|i| fi[i] - fe[i]).collect();
+    on_step(
+        &StepRecord {
+            step: 0,
+            time: 0.0,
+            stage: 0,
+            stats: st0,
+            retries: 0,
+            reactions: model.reactions(comm, &react),
+            wall_seconds: t_start.elapsed().as_secs_f64(),
+            displacements: model.mean_displacements(comm, &state.u),
+            energies: Some(energy.current),
+            columns: model.column_values(comm, &state.u, 0.0),
+            failed: Vec::new(),
+        },
+        state,
+        model,
+        None,
+    )?;
+    Ok((energy, r_old))
 }

@@ -25,8 +25,26 @@ pub struct DynState {
     pub a: Vec<f64>,
 }
 
-/// Called with every step (the initial state as step 0), its state and the model.
-pub type DynObserver<'a> = dyn FnMut(&StepRecord, &DynState, &Model) -> Result<()> + 'a;
+/// What implicit dynamics needs to resume after a step besides the solution: velocity,
+/// acceleration, the last residual (the force-averaged schemes use it) and the energy
+/// account.
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
+pub struct DynResume {
+    pub v: Vec<f64>,
+    pub a: Vec<f64>,
+    pub r_old: Vec<f64>,
+    pub energy: energy::EnergyAccount,
+}
+
+/// Called with every step (the initial state as step 0), its state, the model and how
+/// to resume after it (built only when asked for; explicit runs cannot be resumed).
+pub type DynObserver<'a> = dyn FnMut(
+        &StepRecord,
+        &DynState,
+        &Model,
+        Option<&dyn Fn() -> crate::solve::stepping::Resume>,
+    ) -> Result<crate::solve::stepping::Flow>
+    + 'a;
 
 /// Velocity and acceleration of the prescribed dofs at t by central differences of
 /// the prescribed displacement with spacing h: (dof, g, ġ, g̈).
@@ -91,6 +109,11 @@ impl OutputClock {
             end,
         }
     }
+    /// A restart at t: the next output is the first multiple of the interval after it.
+    pub fn skip_to(&mut self, t: f64) {
+        self.next = ((t / self.interval + 1e-9).floor() + 1.0) * self.interval;
+    }
+
     pub fn due(&mut self, t: f64) -> bool {
         let last = t >= self.end * (1.0 - 1e-12);
         if t >= self.next - 1e-9 * self.interval || last {
