@@ -1,0 +1,253 @@
+//! The analyst's workflow (issue 16), through the `alfe` binary as users run it: the
+//! command line, the run's record and log, progress lines, the per-iteration history,
+//! times without drift, and restarts on 1 and 2 ranks.
+
+mod common;
+use common::*;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+const ALFE: &str = env!("CARGO_BIN_EXE_alfe");
+
+/// One launch at a time (2-rank jobs on a 2-core machine starve each other).
+static LAUNCH: std::sync::Mutex<()> = std::sync::Mutex::new(());
+
+/// `alfe ARGS` in `dir` on `ranks` ranks (1: no mpirun), with a time limit.
+fn alfe(dir: &Path, ranks: usize, args: &[&str]) -> Output {
+    let _one = LAUNCH.lock().unwrap_or_else(|e| e.into_inner());
+    let mut cmd = Command::new("timeout");
+    cmd.arg("180");
+    if ranks > 1 {
+        cmd.args(["mpirun", "--oversubscribe", "-n", &ranks.to_string()]);
+    }
+    cmd.arg(ALFE).args(args).current_dir(dir);
+    cmd.env("OMPI_ALLOW_RUN_AS_ROOT", "1")
+        .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
+        .env("OMPI_MCA_mpi_yield_when_idle", "1");
+    let out = cmd.output().expect("cannot launch alfe");
+    assert_ne!(out.status.code(), Some(124), "alfe {args:?} hung");
+    out
+}
+
+fn text(o: &Output) -> (String, String) {
+    (
+        String::from_utf8_lossy(&o.stdout).to_string(),
+        String::from_utf8_lossy(&o.stderr).to_string(),
+    )
+}
+
+fn ok(o: Output) -> String {
+    let (so, se) = text(&o);
+    assert!(o.status.success(), "alfe failed ({:?}):\n{so}\n{se}", o.status.code());
+    so
+}
+
+fn read(path: &Path) -> String {
+    std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+}
+
+/// history.csv as a header and rows of numbers, without the wall-time columns.
+fn numbers(dir: &Path) -> (Vec<String>, Vec<Vec<f64>>) {
+    let text = read(&dir.join("history.csv"));
+    let mut lines = text.lines();
+    let head: Vec<String> = lines.next().unwrap().split(',').map(String::from).collect();
+    let keep: Vec<usize> = (0..head.len())
+        .filter(|&i| !head[i].ends_with("_s"))
+        .collect();
+    let rows = lines
+        .map(|l| {
+            let v: Vec<&str> = l.split(',').collect();
+            keep.iter().map(|&i| v[i].parse().unwrap()).collect()
+        })
+        .collect();
+    (keep.iter().map(|&i| head[i].clone()).collect(), rows)
+}
+
+/// The largest difference between two runs' history rows (matched by step number),
+/// relative to each column's largest value, over the rows of `b`.
+fn history_gap(a: &Path, b: &Path) -> f64 {
+    let (ha, ra) = numbers(a);
+    let (hb, rb) = numbers(b);
+    assert_eq!(ha, hb, "history columns differ");
+    let mut worst = 0.0f64;
+    for row in &rb {
+        let other = ra
+            .iter()
+            .find(|r| r[0] == row[0])
+            .unwrap_or_else(|| panic!("step {} missing", row[0]));
+        for c in 1..row.len() {
+            let scale = ra.iter().map(|r| r[c].abs()).fold(1e-300, f64::max);
+            worst = worst.max((row[c] - other[c]).abs() / scale.max(1e-12));
+        }
+    }
+    worst
+}
+
+fn scratch(name: &str) -> PathBuf {
+    temp_dir(&format!("workflow-{name}"))
+}
+
+/// A run leaves its record: `deck.toml` (the deck as read, with alfe's version and
+/// commit, the command line and the date) that runs again as it stands to the same
+/// answers, `log.txt` with the progress lines and the final line, and summary.json's
+/// `run`.
+#[test]
+fn a_run_leaves_its_record_and_log() {
+    let dir = scratch("record");
+    let first = ok(alfe(&dir, 1, &["sliding-block", "--out=a"]));
+    let deck = read(&dir.join("a/deck.toml"));
+    assert!(deck.contains(&format!("alfe {}", env!("CARGO_PKG_VERSION"))), "{deck}");
+    assert!(deck.contains("commit ") && deck.contains("# command: "), "{deck}");
+    assert!(deck.contains("sliding-block --out=a"), "{deck}");
+    assert!(deck.contains("friction_threshold = \"multiplier\""), "defaults filled in:\n{deck}");
+    let log = read(&dir.join("a/log.txt"));
+    let last = first.lines().last().unwrap();
+    assert!(log.ends_with(&format!("{last}\n")), "log:\n{log}\nstdout ends {last}");
+    assert!(log.contains("step    1"), "{log}");
+    let summary: serde_json::Value = serde_json::from_str(&read(&dir.join("a/summary.json"))).unwrap();
+    let run = &summary["run"];
+    assert_eq!(run["ranks"], 1);
+    assert_eq!(run["version"], env!("CARGO_PKG_VERSION"));
+    assert!(run["started"].as_str().unwrap().ends_with('Z'), "{run}");
+    assert!(!run["commit"].as_str().unwrap().is_empty());
+    // The echo runs to the same answers.
+    ok(alfe(&dir, 1, &["a/deck.toml", "-q", "-o", "b"]));
+    assert!(history_gap(&dir.join("a"), &dir.join("b")) == 0.0);
+}
+
+/// The command line as users write it: `alfe DECK`, `--out=DIR` and `-o DIR`, short
+/// flags, help per subcommand, the version with its commit, and one clear line with
+/// exit code 2 for a mistake.
+#[test]
+fn command_line_forms() {
+    let dir = scratch("cli");
+    std::fs::write(dir.join("my.toml"), builtin("cube-stretch")).unwrap();
+    ok(alfe(&dir, 1, &["my.toml", "-q", "-o", "x", "-s", "jfnk"]));
+    let s: serde_json::Value = serde_json::from_str(&read(&dir.join("x/summary.json"))).unwrap();
+    assert_eq!(s["solver"], "jfnk");
+    let help = ok(alfe(&dir, 1, &["check", "--help"]));
+    assert!(help.contains("--ranks") && help.contains("Usage: alfe check"), "{help}");
+    let help = ok(alfe(&dir, 1, &["help", "run"]));
+    assert!(help.contains("--restart") && help.contains("--stop-after"), "{help}");
+    let v = ok(alfe(&dir, 1, &["--version"]));
+    assert!(v.starts_with(&format!("alfe {} (", env!("CARGO_PKG_VERSION"))), "{v}");
+    for (args, want) in [
+        (vec!["run", "--bogus"], "unexpected argument '--bogus'"),
+        (vec!["run", "-s", "gauss"], "invalid value 'gauss'"),
+        (vec!["check", "--ranks", "0"], "--ranks"),
+        (vec!["scene", "show"], "<NAME>"),
+    ] {
+        let o = alfe(&dir, 1, &args);
+        let (_, se) = text(&o);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {se}");
+        let lines: Vec<&str> = se.lines().filter(|l| !l.trim().is_empty()).collect();
+        assert_eq!(lines.len(), 1, "{args:?}: {se}");
+        assert!(lines[0].starts_with("alfe: error: ") && lines[0].contains(want), "{se}");
+    }
+}
+
+/// Progress lines give each wall's force and the time left; step times are the decimal
+/// times a user reads (0.3, not 0.30000000000000004).
+#[test]
+fn progress_shows_wall_forces_and_times_do_not_drift() {
+    let dir = scratch("progress");
+    let out = ok(alfe(&dir, 1, &["cylinder-press", "-o", "p"]));
+    let step3 = out.lines().find(|l| l.starts_with("step    3")).unwrap();
+    assert!(step3.contains("roller=(") && step3.contains("base=("), "{step3}");
+    assert!(step3.contains("eta "), "{step3}");
+    let hist = read(&dir.join("p/history.csv"));
+    let times: Vec<&str> = hist.lines().skip(1).map(|l| l.split(',').nth(1).unwrap()).collect();
+    assert_eq!(&times[..4], &["0.1", "0.2", "0.3", "0.4"], "{times:?}");
+    assert!(times.iter().all(|t| t.len() <= 4), "{times:?}");
+}
+
+/// `--iterations` writes every iteration of every attempt, failed ones with why, and
+/// the iterations add up to the summary's count.
+#[test]
+fn iterations_csv_has_every_attempt() {
+    let dir = scratch("iterations");
+    // Too few iterations for the first, large step: it fails and is cut.
+    let deck = edit(
+        &edit(&builtin("cylinder-press"), "step = 0.1", "step = 0.5"),
+        "nonlinear = \"newton\"",
+        "nonlinear = \"newton\"\nmax_iterations = 4",
+    );
+    std::fs::write(dir.join("d.toml"), deck).unwrap();
+    ok(alfe(&dir, 1, &["d.toml", "-q", "-o", "i", "--iterations"]));
+    let csv = read(&dir.join("i/iterations.csv"));
+    let rows: Vec<Vec<String>> = csv
+        .lines()
+        .skip(1)
+        .map(|l| {
+            let (head, outcome) = l.split_at(l.match_indices(',').nth(5).unwrap().0);
+            let mut v: Vec<String> = head.split(',').map(String::from).collect();
+            v.push(outcome[1..].to_string());
+            v
+        })
+        .collect();
+    let failed: Vec<&Vec<String>> = rows.iter().filter(|r| r[6].starts_with('"')).collect();
+    assert!(!failed.is_empty(), "a failed attempt expected:\n{csv}");
+    assert!(failed[0][6].contains("no convergence in 4 iterations"), "{:?}", failed[0]);
+    assert!(rows.iter().any(|r| r[1] == "2"), "a second attempt expected");
+    let converged = rows.iter().filter(|r| r[6] == "converged").count();
+    let s: serde_json::Value = serde_json::from_str(&read(&dir.join("i/summary.json"))).unwrap();
+    assert_eq!(converged as u64, s["steps"].as_u64().unwrap());
+    // Rows per attempt = iterations + 1 (the residual before the first correction).
+    let attempts = rows.iter().filter(|r| r[4] == "0").count();
+    assert_eq!(
+        (rows.len() - attempts) as u64,
+        s["nonlinear_iterations"].as_u64().unwrap()
+    );
+}
+
+/// A run stopped after step k and restarted gives the uninterrupted run's answers (the
+/// history from step k + 1 on within 1e-10), static with frictional contact and hybrid
+/// elements, and implicit dynamics with a J2 bar against a wall; on 2 ranks too. A
+/// restart with another deck, into its own directory, or with nothing to restart from
+/// is refused with the reason.
+#[test]
+fn a_restarted_run_gives_the_uninterrupted_answer() {
+    let dir = scratch("restart");
+    for (scene, k, ranks) in [
+        ("cylinder-press", "4", 1),
+        ("cylinder-press", "6", 2),
+        ("taylor-bar", "20", 1),
+    ] {
+        let tag = format!("{scene}-{ranks}");
+        let full = format!("{tag}-full");
+        let part = format!("{tag}-part");
+        ok(alfe(&dir, ranks, &[scene, "-q", "-o", &full, "--partitions", "parts"]));
+        let stopped = ok(alfe(
+            &dir,
+            ranks,
+            &[scene, "-q", "-o", &part, "--stop-after", k, "--partitions", "parts"],
+        ));
+        assert!(stopped.contains(&format!("stopped after step {k}")), "{stopped}");
+        ok(alfe(&dir, ranks, &["run", "--restart", &part, "-q", "--partitions", "parts"]));
+        let again = dir.join(format!("{part}-restart"));
+        let (_, rows) = numbers(&again);
+        assert_eq!(rows[0][0], k.parse::<f64>().unwrap() + 1.0, "{tag}: first step");
+        let gap = history_gap(&dir.join(&full), &again);
+        eprintln!("{tag}: restart differs by {gap:e}");
+        assert!(gap < 1e-10, "{tag}: restart differs by {gap:e}");
+        let s: serde_json::Value = serde_json::from_str(&read(&again.join("summary.json"))).unwrap();
+        assert_eq!(s["restarted_from"]["step"].as_u64(), Some(k.parse().unwrap()));
+    }
+    // Refusals: another deck, the same directory, nothing to restart from.
+    let part = "cylinder-press-1-part";
+    for (args, want) in [
+        (vec!["cube-stretch", "--restart", part], "another deck"),
+        (vec!["run", "--restart", part, "-o", part], "another directory"),
+        (vec!["cylinder-press", "--restart", "parts"], "no restart files"),
+    ] {
+        let o = alfe(&dir, 1, &args);
+        let (_, se) = text(&o);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {se}");
+        assert!(se.contains(want), "{args:?}: {se}");
+    }
+    // Another rank count is refused too.
+    let o = alfe(&dir, 2, &["run", "--restart", part, "-o", "two", "--partitions", "parts"]);
+    let (_, se) = text(&o);
+    assert_eq!(o.status.code(), Some(2), "{se}");
+    assert!(se.contains("rank"), "{se}");
+}
