@@ -38,7 +38,11 @@ fn text(o: &Output) -> (String, String) {
 
 fn ok(o: Output) -> String {
     let (so, se) = text(&o);
-    assert!(o.status.success(), "alfe failed ({:?}):\n{so}\n{se}", o.status.code());
+    assert!(
+        o.status.success(),
+        "alfe failed ({:?}):\n{so}\n{se}",
+        o.status.code()
+    );
     so
 }
 
@@ -96,15 +100,28 @@ fn a_run_leaves_its_record_and_log() {
     let dir = scratch("record");
     let first = ok(alfe(&dir, 1, &["sliding-block", "--out=a"]));
     let deck = read(&dir.join("a/deck.toml"));
-    assert!(deck.contains(&format!("alfe {}", env!("CARGO_PKG_VERSION"))), "{deck}");
-    assert!(deck.contains("commit ") && deck.contains("# command: "), "{deck}");
+    assert!(
+        deck.contains(&format!("alfe {}", env!("CARGO_PKG_VERSION"))),
+        "{deck}"
+    );
+    assert!(
+        deck.contains("commit ") && deck.contains("# command: "),
+        "{deck}"
+    );
     assert!(deck.contains("sliding-block --out=a"), "{deck}");
-    assert!(deck.contains("friction_threshold = \"multiplier\""), "defaults filled in:\n{deck}");
+    assert!(
+        deck.contains("friction_threshold = \"multiplier\""),
+        "defaults filled in:\n{deck}"
+    );
     let log = read(&dir.join("a/log.txt"));
     let last = first.lines().last().unwrap();
-    assert!(log.ends_with(&format!("{last}\n")), "log:\n{log}\nstdout ends {last}");
+    assert!(
+        log.ends_with(&format!("{last}\n")),
+        "log:\n{log}\nstdout ends {last}"
+    );
     assert!(log.contains("step    1"), "{log}");
-    let summary: serde_json::Value = serde_json::from_str(&read(&dir.join("a/summary.json"))).unwrap();
+    let summary: serde_json::Value =
+        serde_json::from_str(&read(&dir.join("a/summary.json"))).unwrap();
     let run = &summary["run"];
     assert_eq!(run["ranks"], 1);
     assert_eq!(run["version"], env!("CARGO_PKG_VERSION"));
@@ -126,11 +143,20 @@ fn command_line_forms() {
     let s: serde_json::Value = serde_json::from_str(&read(&dir.join("x/summary.json"))).unwrap();
     assert_eq!(s["solver"], "jfnk");
     let help = ok(alfe(&dir, 1, &["check", "--help"]));
-    assert!(help.contains("--ranks") && help.contains("Usage: alfe check"), "{help}");
+    assert!(
+        help.contains("--ranks") && help.contains("Usage: alfe check"),
+        "{help}"
+    );
     let help = ok(alfe(&dir, 1, &["help", "run"]));
-    assert!(help.contains("--restart") && help.contains("--stop-after"), "{help}");
+    assert!(
+        help.contains("--restart") && help.contains("--stop-after"),
+        "{help}"
+    );
     let v = ok(alfe(&dir, 1, &["--version"]));
-    assert!(v.starts_with(&format!("alfe {} (", env!("CARGO_PKG_VERSION"))), "{v}");
+    assert!(
+        v.starts_with(&format!("alfe {} (", env!("CARGO_PKG_VERSION"))),
+        "{v}"
+    );
     for (args, want) in [
         (vec!["run", "--bogus"], "unexpected argument '--bogus'"),
         (vec!["run", "-s", "gauss"], "invalid value 'gauss'"),
@@ -142,7 +168,10 @@ fn command_line_forms() {
         assert_eq!(o.status.code(), Some(2), "{args:?}: {se}");
         let lines: Vec<&str> = se.lines().filter(|l| !l.trim().is_empty()).collect();
         assert_eq!(lines.len(), 1, "{args:?}: {se}");
-        assert!(lines[0].starts_with("alfe: error: ") && lines[0].contains(want), "{se}");
+        assert!(
+            lines[0].starts_with("alfe: error: ") && lines[0].contains(want),
+            "{se}"
+        );
     }
 }
 
@@ -153,10 +182,17 @@ fn progress_shows_wall_forces_and_times_do_not_drift() {
     let dir = scratch("progress");
     let out = ok(alfe(&dir, 1, &["cylinder-press", "-o", "p"]));
     let step3 = out.lines().find(|l| l.starts_with("step    3")).unwrap();
-    assert!(step3.contains("roller=(") && step3.contains("base=("), "{step3}");
+    assert!(
+        step3.contains("roller=(") && step3.contains("base=("),
+        "{step3}"
+    );
     assert!(step3.contains("eta "), "{step3}");
     let hist = read(&dir.join("p/history.csv"));
-    let times: Vec<&str> = hist.lines().skip(1).map(|l| l.split(',').nth(1).unwrap()).collect();
+    let times: Vec<&str> = hist
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').nth(1).unwrap())
+        .collect();
     assert_eq!(&times[..4], &["0.1", "0.2", "0.3", "0.4"], "{times:?}");
     assert!(times.iter().all(|t| t.len() <= 4), "{times:?}");
 }
@@ -187,8 +223,15 @@ fn iterations_csv_has_every_attempt() {
         .collect();
     let failed: Vec<&Vec<String>> = rows.iter().filter(|r| r[6].starts_with('"')).collect();
     assert!(!failed.is_empty(), "a failed attempt expected:\n{csv}");
-    assert!(failed[0][6].contains("no convergence in 4 iterations"), "{:?}", failed[0]);
-    assert!(rows.iter().any(|r| r[1] == "2"), "a second attempt expected");
+    assert!(
+        failed[0][6].contains("no convergence in 4 iterations"),
+        "{:?}",
+        failed[0]
+    );
+    assert!(
+        rows.iter().any(|r| r[1] == "2"),
+        "a second attempt expected"
+    );
     let converged = rows.iter().filter(|r| r[6] == "converged").count();
     let s: serde_json::Value = serde_json::from_str(&read(&dir.join("i/summary.json"))).unwrap();
     assert_eq!(converged as u64, s["steps"].as_u64().unwrap());
@@ -216,29 +259,63 @@ fn a_restarted_run_gives_the_uninterrupted_answer() {
         let tag = format!("{scene}-{ranks}");
         let full = format!("{tag}-full");
         let part = format!("{tag}-part");
-        ok(alfe(&dir, ranks, &[scene, "-q", "-o", &full, "--partitions", "parts"]));
+        ok(alfe(
+            &dir,
+            ranks,
+            &[scene, "-q", "-o", &full, "--partitions", "parts"],
+        ));
         let stopped = ok(alfe(
             &dir,
             ranks,
-            &[scene, "-q", "-o", &part, "--stop-after", k, "--partitions", "parts"],
+            &[
+                scene,
+                "-q",
+                "-o",
+                &part,
+                "--stop-after",
+                k,
+                "--partitions",
+                "parts",
+            ],
         ));
-        assert!(stopped.contains(&format!("stopped after step {k}")), "{stopped}");
-        ok(alfe(&dir, ranks, &["run", "--restart", &part, "-q", "--partitions", "parts"]));
+        assert!(
+            stopped.contains(&format!("stopped after step {k}")),
+            "{stopped}"
+        );
+        ok(alfe(
+            &dir,
+            ranks,
+            &["run", "--restart", &part, "-q", "--partitions", "parts"],
+        ));
         let again = dir.join(format!("{part}-restart"));
         let (_, rows) = numbers(&again);
-        assert_eq!(rows[0][0], k.parse::<f64>().unwrap() + 1.0, "{tag}: first step");
+        assert_eq!(
+            rows[0][0],
+            k.parse::<f64>().unwrap() + 1.0,
+            "{tag}: first step"
+        );
         let gap = history_gap(&dir.join(&full), &again);
         eprintln!("{tag}: restart differs by {gap:e}");
         assert!(gap < 1e-10, "{tag}: restart differs by {gap:e}");
-        let s: serde_json::Value = serde_json::from_str(&read(&again.join("summary.json"))).unwrap();
-        assert_eq!(s["restarted_from"]["step"].as_u64(), Some(k.parse().unwrap()));
+        let s: serde_json::Value =
+            serde_json::from_str(&read(&again.join("summary.json"))).unwrap();
+        assert_eq!(
+            s["restarted_from"]["step"].as_u64(),
+            Some(k.parse().unwrap())
+        );
     }
     // Refusals: another deck, the same directory, nothing to restart from.
     let part = "cylinder-press-1-part";
     for (args, want) in [
         (vec!["cube-stretch", "--restart", part], "another deck"),
-        (vec!["run", "--restart", part, "-o", part], "another directory"),
-        (vec!["cylinder-press", "--restart", "parts"], "no restart files"),
+        (
+            vec!["run", "--restart", part, "-o", part],
+            "another directory",
+        ),
+        (
+            vec!["cylinder-press", "--restart", "parts"],
+            "no restart files",
+        ),
     ] {
         let o = alfe(&dir, 1, &args);
         let (_, se) = text(&o);
@@ -246,7 +323,19 @@ fn a_restarted_run_gives_the_uninterrupted_answer() {
         assert!(se.contains(want), "{args:?}: {se}");
     }
     // Another rank count is refused too.
-    let o = alfe(&dir, 2, &["run", "--restart", part, "-o", "two", "--partitions", "parts"]);
+    let o = alfe(
+        &dir,
+        2,
+        &[
+            "run",
+            "--restart",
+            part,
+            "-o",
+            "two",
+            "--partitions",
+            "parts",
+        ],
+    );
     let (_, se) = text(&o);
     assert_eq!(o.status.code(), Some(2), "{se}");
     assert!(se.contains("rank"), "{se}");

@@ -835,8 +835,12 @@ fn contributions_summary(
 
 /// `alfe check`: validate and report the model size and partition quality (serial).
 pub fn check(target: &str, ranks: usize) -> Result<String> {
-    let src = crate::scene::load(target)?;
-    let scene = crate::scene::read(&src)?;
+    check_source(&crate::scene::load(target)?, ranks)
+}
+
+/// [`check`] of a deck's text (the deck fuzzer calls it for thousands of decks).
+pub fn check_source(src: &crate::scene::Source, ranks: usize) -> Result<String> {
+    let scene = crate::scene::read(src)?;
     let def = &scene.model;
     let mut s = describe(def, &scene.run);
     if ranks > 1 {

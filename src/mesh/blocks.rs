@@ -27,9 +27,10 @@ pub struct Slab {
     pub cell_size: f64,
 }
 
-/// The lattice lines along one axis: the boxes' faces and the slabs' ends, each span
-/// split evenly into ⌈span / h⌉ cells, h the smallest cell size of the slabs holding it.
-fn lines(spec: &BlocksSpec, axis: usize) -> Vec<f64> {
+/// The spans between consecutive cuts along one axis (the boxes' faces and the slabs'
+/// ends) with the cell count of each, ⌈span / h⌉, h the smallest cell size of the slabs
+/// holding it. Counts are reals: an absurd deck is measured before anything is allocated.
+fn spans(spec: &BlocksSpec, axis: usize) -> Vec<(f64, f64, f64)> {
     let mut cuts: Vec<f64> = spec
         .solids
         .iter()
@@ -45,22 +46,34 @@ fn lines(spec: &BlocksSpec, axis: usize) -> Vec<f64> {
     cuts.sort_by(f64::total_cmp);
     let tol = 1e-9 * cuts.iter().fold(0.0f64, |m, x| m.max(x.abs())).max(1.0);
     cuts.dedup_by(|a, b| (*a - *b).abs() <= tol);
-    let mut out = vec![cuts[0]];
-    for w in cuts.windows(2) {
-        let h = spec
-            .refine
-            .iter()
-            .filter(|r| r.axis == axis && r.range[0] <= w[0] + tol && w[1] <= r.range[1] + tol)
-            .fold(spec.cell_size, |h, r| h.min(r.cell_size));
-        let n = ((w[1] - w[0]) / h - 1e-9).ceil().max(1.0) as usize;
-        out.extend((1..=n).map(|i| w[0] + (w[1] - w[0]) * i as f64 / n as f64));
+    cuts.windows(2)
+        .map(|w| {
+            let h = spec
+                .refine
+                .iter()
+                .filter(|r| r.axis == axis && r.range[0] <= w[0] + tol && w[1] <= r.range[1] + tol)
+                .fold(spec.cell_size, |h, r| h.min(r.cell_size));
+            (w[0], w[1], ((w[1] - w[0]) / h - 1e-9).ceil().max(1.0))
+        })
+        .collect()
+}
+
+/// The lattice lines along one axis: every span split evenly into its cells.
+fn lines(spec: &BlocksSpec, axis: usize) -> Vec<f64> {
+    let sp = spans(spec, axis);
+    let mut out = vec![sp.first().map_or(0.0, |s| s.0)];
+    for (a, b, n) in sp {
+        let n = n as usize;
+        out.extend((1..=n).map(|i| a + (b - a) * i as f64 / n as f64));
     }
     out
 }
 
 /// The number of lattice cells (to refuse absurd sizes before allocating).
 pub fn lattice_cells(spec: &BlocksSpec) -> f64 {
-    (0..3).map(|a| (lines(spec, a).len() - 1) as f64).product()
+    (0..3)
+        .map(|a| spans(spec, a).iter().map(|s| s.2).sum::<f64>())
+        .product()
 }
 
 /// The part's mesh (element part index `part`); nodes no cell uses are dropped. Groups

@@ -799,11 +799,8 @@ fn extra_entries(given: &toml::Value, read: &toml::Value, path: &mut String) -> 
     Ok(())
 }
 
-/// The path to the one value under `path` that an error message quotes (an array of
-/// the named length, the unknown variant, the offending number or string), if exactly
-/// one matches.
-fn deeper_path(root: &toml::Value, path: &str, msg: &str) -> Option<String> {
-    use toml::Value as V;
+/// The value at a serde path (`parts[0].mesh.cells[1]`), if there is one.
+fn value_at<'a>(root: &'a toml::Value, path: &str) -> Option<&'a toml::Value> {
     let mut node = root;
     for part in path.split('.').filter(|p| !p.is_empty()) {
         let (key, idx) = match part.find('[') {
@@ -821,6 +818,15 @@ fn deeper_path(root: &toml::Value, path: &str, msg: &str) -> Option<String> {
             node = node.as_array()?.get(i.parse::<usize>().ok()?)?;
         }
     }
+    Some(node)
+}
+
+/// The path to the one value under `path` that an error message quotes (an array of
+/// the named length, the unknown variant, the offending number or string), if exactly
+/// one matches.
+fn deeper_path(root: &toml::Value, path: &str, msg: &str) -> Option<String> {
+    use toml::Value as V;
+    let node = value_at(root, path)?;
     if !node.is_table() {
         return None;
     }
@@ -886,6 +892,19 @@ fn deeper_path(root: &toml::Value, path: &str, msg: &str) -> Option<String> {
 }
 
 fn parse_fields(text: &str) -> Result<Deck, String> {
+    // TOML allows a carriage return only before a newline; its parser then reports an
+    // empty message.
+    if let Some(i) = text
+        .match_indices('\r')
+        .map(|m| m.0)
+        .find(|&i| !text[i + 1..].starts_with('\n'))
+    {
+        let line = text[..i].lines().count().max(1);
+        return Err(format!(
+            "a carriage return (\\r) that does not end a line (line {line}): save the deck with LF \
+             or CRLF line endings"
+        ));
+    }
     let de = toml::Deserializer::new(text);
     serde_path_to_error::deserialize(de).map_err(|e| {
         let path = e.path().to_string();
@@ -893,13 +912,27 @@ fn parse_fields(text: &str) -> Result<Deck, String> {
         let line = inner
             .span()
             .map(|s| text[..s.start.min(text.len())].lines().count().max(1));
-        let msg = inner.message().trim().replace('\n', " ");
+        let mut msg = inner.message().trim().replace('\n', " ");
+        if msg.is_empty() {
+            msg = "not valid TOML here".into();
+        }
         let at = line.map(|l| format!(" (line {l})")).unwrap_or_default();
+        let table = text.parse::<toml::Table>().ok().map(toml::Value::Table);
+        // The toml crate hands a date-time to serde as a private map: say what it is.
+        let is_datetime = table
+            .as_ref()
+            .and_then(|t| value_at(t, &path))
+            .is_some_and(|v| v.is_datetime());
+        if msg.contains("$__toml_private_datetime") {
+            msg = "a date-time where a table is expected".into();
+        } else if is_datetime && msg.starts_with("invalid type: map") {
+            msg = msg.replacen("map", "date-time", 1);
+        }
         // Inside an internally tagged table (`kind = ...`, `type = ...`) serde loses the
         // key: find the value the message names in that table.
-        let path = match text.parse::<toml::Table>() {
-            Ok(t) => deeper_path(&toml::Value::Table(t), &path, &msg).unwrap_or(path),
-            Err(_) => path,
+        let path = match &table {
+            Some(t) => deeper_path(t, &path, &msg).unwrap_or(path),
+            None => path,
         };
         if path.is_empty() || path == "." {
             format!("{msg}{at}")
