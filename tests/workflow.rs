@@ -340,3 +340,70 @@ fn a_restarted_run_gives_the_uninterrupted_answer() {
     assert_eq!(o.status.code(), Some(2), "{se}");
     assert!(se.contains("rank"), "{se}");
 }
+
+/// `scripts/plot RUN_DIR` draws the forces and the convergence of any run (here a deck
+/// of the user's, with its iterations) without code.
+#[test]
+fn plot_draws_any_run() {
+    let dir = scratch("plot");
+    std::fs::write(dir.join("mine.toml"), builtin("sliding-block")).unwrap();
+    ok(alfe(
+        &dir,
+        1,
+        &["mine.toml", "-q", "-o", "r", "--iterations"],
+    ));
+    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("scripts/plot");
+    let o = Command::new("/usr/bin/python3")
+        .arg(&script)
+        .arg(dir.join("r"))
+        .output()
+        .expect("cannot run scripts/plot");
+    let (so, se) = text(&o);
+    assert!(o.status.success(), "scripts/plot failed:\n{so}\n{se}");
+    for png in ["forces.png", "convergence.png"] {
+        let p = dir.join("r/plots").join(png);
+        assert!(so.contains(png), "{so}");
+        let bytes = std::fs::read(&p).unwrap_or_else(|e| panic!("{}: {e}", p.display()));
+        assert!(
+            bytes.starts_with(b"\x89PNG") && bytes.len() > 20_000,
+            "{png}: {} bytes",
+            bytes.len()
+        );
+    }
+}
+
+/// An element that inverts on one rank is named by every rank (it used to be "an
+/// element on another rank failed" on 2 ranks): the cantilever's far end is pushed
+/// 20 mm back into it, in slabs along x, so the far end's elements are on rank 1.
+#[test]
+fn an_inverted_element_is_named_on_two_ranks() {
+    let dir = scratch("crush");
+    let deck = edit(&builtin("cantilever"), "step = 0.1\n", "step = 0.1\nmin_step = 0.1\n")
+        + "\n[[node_sets]]\nname = \"far_end\"\ngroup = \"xmax\"\n\n[[boundary]]\ntype = \"displacement\"\n\
+           set = \"far_end\"\ncomponents = [\"x\"]\nvalue = -20.0\n\n[partition]\nmethod = \"slabs\"\naxis = \"x\"\n";
+    std::fs::write(dir.join("crush.toml"), deck).unwrap();
+    for ranks in [1, 2] {
+        let o = alfe(
+            &dir,
+            ranks,
+            &[
+                "crush.toml",
+                "-q",
+                "-o",
+                &format!("o{ranks}"),
+                "--partitions",
+                "p",
+            ],
+        );
+        let (_, se) = text(&o);
+        assert_eq!(o.status.code(), Some(3), "{ranks} ranks: {se}");
+        let line = se
+            .lines()
+            .find(|l| l.starts_with("alfe: error"))
+            .unwrap_or_default();
+        assert!(
+            line.contains("element ") && line.contains("det F") && !line.contains("another rank"),
+            "{ranks} ranks: {line}"
+        );
+    }
+}

@@ -50,6 +50,8 @@ pub trait Shape: std::fmt::Debug + Send + Sync {
 pub struct Plane {
     /// Edge length of the square drawn by [`Shape::surface`] (the plane itself is infinite).
     pub display_size: f64,
+    /// Its centre in the plane's (x, y): where the model is, so it is drawn under it.
+    pub display_center: [f64; 2],
 }
 
 /// Rectangle |x| ≤ lx/2, |y| ≤ ly/2 at z = 0, normal +z. Points whose (x, y) fall outside
@@ -203,7 +205,12 @@ impl Shape for Plane {
     }
 
     fn surface(&self) -> (Vec<[f64; 3]>, Vec<[usize; 3]>) {
-        rectangle_surface(self.display_size, self.display_size)
+        let (mut v, t) = rectangle_surface(self.display_size, self.display_size);
+        for p in &mut v {
+            p[0] += self.display_center[0];
+            p[1] += self.display_center[1];
+        }
+        (v, t)
     }
 
     fn kind(&self) -> &'static str {
@@ -842,7 +849,10 @@ mod tests {
 
     #[test]
     fn plane_random_points() {
-        let shape = Plane { display_size: 3.0 };
+        let shape = Plane {
+            display_size: 3.0,
+            display_center: [0.0; 2],
+        };
         let mut rng = Lcg(1);
         for _ in 0..200 {
             let x = [
@@ -1194,7 +1204,14 @@ mod tests {
     #[test]
     fn surfaces_lie_on_shapes_and_face_outward() {
         use std::f64::consts::PI;
-        check_surface(&Plane { display_size: 3.0 }, 9.0, 1e-14);
+        check_surface(
+            &Plane {
+                display_size: 3.0,
+                display_center: [0.0; 2],
+            },
+            9.0,
+            1e-14,
+        );
         check_surface(&FinitePlane { lx: 2.0, ly: 3.0 }, 6.0, 1e-14);
         let (r, l) = (0.7, 2.5);
         check_surface(
@@ -1335,7 +1352,12 @@ mod tests {
 
     #[test]
     fn validate_names_the_field() {
-        assert!(Plane { display_size: 1.0 }.validate().is_ok());
+        assert!(Plane {
+            display_size: 1.0,
+            display_center: [0.0; 2]
+        }
+        .validate()
+        .is_ok());
         assert!(FinitePlane { lx: 1.0, ly: 2.0 }.validate().is_ok());
         assert!(Cylinder {
             radius: 1.0,
@@ -1351,7 +1373,11 @@ mod tests {
             "radius must be positive, got -1"
         );
         assert_eq!(
-            err(Plane { display_size: 0.0 }.validate()),
+            err(Plane {
+                display_size: 0.0,
+                display_center: [0.0; 2]
+            }
+            .validate()),
             "display_size must be positive, got 0"
         );
         assert!(err(FinitePlane {
@@ -1384,7 +1410,10 @@ mod tests {
     #[test]
     fn kinds() {
         let shapes: [&dyn Shape; 5] = [
-            &Plane { display_size: 1.0 },
+            &Plane {
+                display_size: 1.0,
+                display_center: [0.0; 2],
+            },
             &FinitePlane { lx: 1.0, ly: 1.0 },
             &Cylinder {
                 radius: 1.0,

@@ -11,19 +11,44 @@ use serde::{Deserialize, Serialize};
 /// The shape of a wall, as a deck names it.
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
 pub enum ShapeDef {
-    Plane { display_size: f64 },
-    FinitePlane { lx: f64, ly: f64 },
-    Cylinder { radius: f64, length: f64 },
-    Sphere { radius: f64 },
-    Prism { size: [f64; 3] },
-    Ellipsoid { radii: [f64; 3] },
-    Torus { radius: f64, tube: f64 },
+    Plane {
+        display_size: f64,
+        #[serde(default)]
+        display_center: [f64; 2],
+    },
+    FinitePlane {
+        lx: f64,
+        ly: f64,
+    },
+    Cylinder {
+        radius: f64,
+        length: f64,
+    },
+    Sphere {
+        radius: f64,
+    },
+    Prism {
+        size: [f64; 3],
+    },
+    Ellipsoid {
+        radii: [f64; 3],
+    },
+    Torus {
+        radius: f64,
+        tube: f64,
+    },
 }
 
 impl ShapeDef {
     pub fn build(&self) -> Box<dyn Shape> {
         match *self {
-            ShapeDef::Plane { display_size } => Box::new(Plane { display_size }),
+            ShapeDef::Plane {
+                display_size,
+                display_center,
+            } => Box::new(Plane {
+                display_size,
+                display_center,
+            }),
             ShapeDef::FinitePlane { lx, ly } => Box::new(FinitePlane { lx, ly }),
             ShapeDef::Cylinder { radius, length } => Box::new(Cylinder { radius, length }),
             ShapeDef::Sphere { radius } => Box::new(Sphere { radius }),

@@ -1090,7 +1090,10 @@ mod tests {
         run_ranks(1, |c| {
             let def = WallDef {
                 name: "floor".into(),
-                shape: ShapeDef::Plane { display_size: 1.0 },
+                shape: ShapeDef::Plane {
+                    display_size: 1.0,
+                    display_center: [0.0; 2],
+                },
                 motion: RigidMotion::fixed(
                     [0.0; 3],
                     [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],

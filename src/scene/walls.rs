@@ -587,7 +587,10 @@ fn shape_def(w: &WallDeck, f: &str) -> Result<ShapeDef> {
                 None => 0.0,
                 Some(_) => size(1)?[0],
             };
-            ShapeDef::Plane { display_size }
+            ShapeDef::Plane {
+                display_size,
+                display_center: [0.0; 2],
+            }
         }
         ShapeKind::FinitePlane => {
             unused("radius", w.radius.is_some())?;
@@ -787,10 +790,32 @@ fn build_wall(w: &WallDeck, f: &str, inp: &WallInputs, entity: bool) -> Result<W
             return Err(err(format!("{f}.{key}"), "expected finite numbers"));
         }
     }
-    // A plane without a display size is drawn as large as the model.
-    if let ShapeDef::Plane { display_size } = &mut shape {
+    // A plane without a display size is drawn under the model as large as the model's
+    // extent in the plane (at t = 0; a fifth larger), not around the plane's origin.
+    if let ShapeDef::Plane {
+        display_size,
+        display_center,
+    } = &mut shape
+    {
         if *display_size == 0.0 {
-            *display_size = 2e9 * inp.tol;
+            let pose = motion.pose(0.0);
+            let (lo, hi) = crate::mesh::select::bounding_box(inp.mesh);
+            let (mut a, mut b) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+            for k in 0..8 {
+                let c = std::array::from_fn(|i| if k >> i & 1 == 0 { lo[i] } else { hi[i] });
+                let l = pose.to_local(c);
+                for i in 0..2 {
+                    a[i] = a[i].min(l[i]);
+                    b[i] = b[i].max(l[i]);
+                }
+            }
+            let extent = (b[0] - a[0]).max(b[1] - a[1]);
+            *display_size = if extent > 0.0 {
+                1.2 * extent
+            } else {
+                2e9 * inp.tol
+            };
+            *display_center = [0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1])];
         }
     }
     let length = body_length(&shape, 2e9 * inp.tol);
