@@ -131,6 +131,10 @@ impl RestrictedSchwarz {
             row_ptr: Vec::with_capacity(n_own + n_ghost + 1),
             cols: Vec::with_capacity(nnz_blocks),
             entries: Vec::with_capacity(nnz_blocks),
+            // Element blocks are never ghosts: only owned rows can be.
+            element_rows: (0..n_own + n_ghost)
+                .map(|i| i < n_own && mat.is_element_row(i))
+                .collect(),
         };
         pat.row_ptr.push(0);
         for i in 0..n_own {

@@ -116,6 +116,16 @@ pub struct LocalBlockPattern {
     pub row_ptr: Vec<usize>,
     pub cols: Vec<usize>,
     pub entries: Vec<usize>,
+    /// Rows that belong to one element alone (a hybrid hex8's pressure block); empty if
+    /// none. See [`DistMatrix::set_element_rows`].
+    pub element_rows: Vec<bool>,
+}
+
+impl LocalBlockPattern {
+    /// Whether row `i` belongs to one element alone.
+    pub fn is_element_row(&self, i: usize) -> bool {
+        self.element_rows.get(i).copied().unwrap_or(false)
+    }
 }
 
 /// The exact sparse factorization of a local block matrix ([`LocalBlockPattern`]): the
@@ -252,6 +262,7 @@ pub(crate) fn diagonal_pattern(k: &DistMatrix) -> LocalBlockPattern {
         row_ptr: Vec::with_capacity(n_own + 1),
         cols: Vec::new(),
         entries: Vec::new(),
+        element_rows: (0..n_own).map(|i| k.is_element_row(i)).collect(),
     };
     pat.row_ptr.push(0);
     for i in 0..n_own {

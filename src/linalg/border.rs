@@ -69,6 +69,7 @@ impl Border {
             row_ptr: vec![0],
             cols: Vec::with_capacity(pat.cols.len()),
             entries: Vec::with_capacity(pat.cols.len()),
+            element_rows: interior.iter().map(|&i| pat.is_element_row(i)).collect(),
         };
         let (mut ib, mut bi, mut bb) = (Vec::new(), Vec::new(), Vec::new());
         for i in 0..n {

@@ -50,9 +50,10 @@ pub const REGULARIZATION: f64 = 1e-6;
 /// The most neighbours an attached block row may have (a multiplier of a node tracked
 /// by a rigid body: the node and the body's translation and rotation blocks)...
 const MAX_NEIGHBOURS: usize = 4;
-/// ... or exactly this many: a hybrid hex8's pressure block and its 8 nodes. Not "up
-/// to 8": the corner node of a hex mesh has 7 mutually coupled neighbours and is not an
-/// algebraic unknown (eliminating it would only perturb the factorization by δ).
+/// ... or, for a row marked as an element's own ([`LocalBlockPattern::element_rows`]: a
+/// hybrid hex8's pressure block), exactly its 8 nodes. Only marked rows: a corner node
+/// of a hex mesh that a rigid body also couples to has 8 mutually coupled neighbours
+/// too, and is no algebraic unknown (eliminating it would only perturb the factor by δ).
 const ELEMENT_NEIGHBOURS: usize = 8;
 
 /// One attached block row `m`: its diagonal entry and its neighbours
@@ -106,8 +107,8 @@ impl Condensation {
     /// The attached block rows of `pat`, or `None` if there are none.
     ///
     /// A block row `m` is attached if its row and column have the same blocks (its
-    /// diagonal and at most [`MAX_NEIGHBOURS`] or exactly [`ELEMENT_NEIGHBOURS`]
-    /// neighbours), every pair of its
+    /// diagonal and at most [`MAX_NEIGHBOURS`] neighbours, or an element row's exactly
+    /// [`ELEMENT_NEIGHBOURS`]), every pair of its
     /// neighbours is already coupled (so eliminating it fills nothing new), and no
     /// neighbour is eliminated itself (rows are taken from the highest index down, so
     /// of two rows attached to each other the lower one stays).
@@ -127,7 +128,8 @@ impl Condensation {
         let mut nb: Vec<(usize, usize)> = Vec::with_capacity(ELEMENT_NEIGHBOURS);
         'rows: for m in (0..n).rev() {
             let len = row(m).len();
-            let sized = (2..=MAX_NEIGHBOURS + 1).contains(&len) || len == ELEMENT_NEIGHBOURS + 1;
+            let sized = (2..=MAX_NEIGHBOURS + 1).contains(&len)
+                || (len == ELEMENT_NEIGHBOURS + 1 && pat.is_element_row(m));
             if !sized || col_count[m] != len {
                 continue;
             }
@@ -181,6 +183,7 @@ impl Condensation {
             row_ptr: Vec::with_capacity(kept.len() + 1),
             cols: Vec::with_capacity(pat.cols.len()),
             entries: Vec::with_capacity(pat.cols.len()),
+            element_rows: kept.iter().map(|&i| pat.is_element_row(i)).collect(),
         };
         reduced.row_ptr.push(0);
         let mut red_src = Vec::with_capacity(pat.cols.len());
@@ -396,6 +399,7 @@ mod tests {
             row_ptr: vec![0],
             cols: Vec::new(),
             entries: Vec::new(),
+            element_rows: (0..total).map(|i| i >= n).collect(),
         };
         for i in 0..total {
             let cols: Vec<usize> = if i < n {
@@ -412,9 +416,9 @@ mod tests {
         pat
     }
 
-    /// A hybrid hex8's pressure block (8 neighbours) is eliminated; the corner nodes of
-    /// a lone hex8 (7 mutually coupled neighbours each) are not, while a lone tet's
-    /// (3 neighbours) are few enough to be attached, as before.
+    /// A hybrid hex8's pressure block (an element row, 8 neighbours) is eliminated; the
+    /// corner nodes of a lone hex8 (7 mutually coupled neighbours each) are not, nor an
+    /// unmarked row with 8, while a lone tet's (3 neighbours) are attached as before.
     #[test]
     fn pressure_blocks_are_attached_and_hex_corner_nodes_are_not() {
         let c = Condensation::find(&element_pattern(8, 1)).expect("the pressure block");
@@ -428,6 +432,9 @@ mod tests {
                 .n_condensed(),
             2
         );
+        let mut unmarked = element_pattern(8, 1);
+        unmarked.element_rows.clear();
+        assert!(Condensation::find(&unmarked).is_none());
         // 4 nodes of a tet: 3 neighbours each, attached as before (the highest first).
         assert_eq!(
             Condensation::find(&element_pattern(4, 0))

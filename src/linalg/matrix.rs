@@ -44,9 +44,23 @@ pub struct DistMatrix {
     /// Entries received from each rank in `finish_assembly`, and where each lands.
     recv_counts: Vec<usize>,
     recv_pos: Vec<usize>,
+    /// Owned local block rows that belong to one element alone (a hybrid hex8's pressure
+    /// block, coupled to its 8 nodes): a factorization may eliminate them element by
+    /// element ([`super::condense`]).
+    element_rows: std::ops::Range<usize>,
 }
 
 impl DistMatrix {
+    /// Mark owned local block rows `rows` as element blocks (see the field).
+    pub fn set_element_rows(&mut self, rows: std::ops::Range<usize>) {
+        self.element_rows = rows;
+    }
+
+    /// Whether owned local block row `i` is an element block.
+    pub fn is_element_row(&self, i: usize) -> bool {
+        self.element_rows.contains(&i)
+    }
+
     /// Collective. `pairs` are the (global block row, global block col) couplings this
     /// rank will add, rows possibly owned by other ranks (they are sent to their owners).
     /// Every owned diagonal block is always in the pattern. Duplicates are fine.
@@ -173,6 +187,7 @@ impl DistMatrix {
             stash_send_counts,
             recv_counts,
             recv_pos,
+            element_rows: 0..0,
         }
     }
 

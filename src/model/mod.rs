@@ -427,7 +427,12 @@ impl Model {
         }
         pairs.sort_unstable();
         pairs.dedup();
-        DistMatrix::new(comm, self.dofs.blocks.clone(), &pairs)
+        let mut k = DistMatrix::new(comm, self.dofs.blocks.clone(), &pairs);
+        // The hybrid elements' pressure blocks: the solids' owned extras.
+        let p = self.dofs.placed(0);
+        let first = p.owned_local - self.dofs.n_local_nodes() + self.dofs.n_owned_nodes();
+        k.set_element_rows(first..first + p.owned);
+        k
     }
 
     /// Assemble the (unconstrained) Jacobian ∂r/∂u at u (collective).

@@ -34,7 +34,14 @@ pub enum Center {
 
 /// Shape of one attribute row: 1, 3 or 6 components.
 /// `Tensor6` carries alfe's Voigt order xx, yy, zz, xy, yz, xz, which is VTK's symmetric-tensor
-/// order: ParaView passes the six components through and reads them that way.
+/// order. XDMF has no component names. ParaView 5.11's Xdmf3 readers (`Xdmf3ReaderS`,
+/// `Xdmf3ReaderT`) keep the six columns in order, set no names and no tensors attribute,
+/// and show their default names for a 6-component array, XX, YY, ZZ, XY, YZ, XZ (colour-by
+/// menu, Calculator's `stress_XY`; the spreadsheet says `stress_0` .. `stress_5`): alfe's.
+/// Its legacy "XDMF Reader" (`XDMFReader`) reads `Tensor6` in XDMF's own order xx, xy, xz,
+/// yy, yz, zz and expands it to a 3x3 tensor that is wrong for alfe's columns; declared
+/// `Matrix`, the same file reads as the six columns in all three (tried by hand).
+/// scripts/check-paraview checks the names and the legacy reader's expansion.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum AttrKind {
     Scalar,
