@@ -20,8 +20,9 @@ the h5py process). Checks:
     Calculator's von Mises from stress_XX .. stress_XZ == `von_mises`, stress_XY,
     stress_YZ, stress_XZ == HDF5 columns 3, 4, 5 (with --wall-force WALL also: the volume
     integral of stress_XZ and stress_ZZ over the height == the wall's fx, fz in history.csv);
-  * how the other XDMF readers show `stress` (Xdmf3ReaderS/T: the six columns, named;
-    XDMFReader: expanded to 3x3 in XDMF's Tensor6 order, reported as WRONG);
+  * how the other XDMF readers show `stress` (declared a six-column `Matrix`: all three
+    readers give the six columns, named; a 3x3 expansion in XDMF's Tensor6 order, as
+    the legacy XDMFReader made of alfe's old `Tensor6` declaration, is reported as WRONG);
     --no-other-readers skips this;
   * last step: displacement component ranges reported by ParaView == h5py's;
   * WarpByVector(displacement) at the last step: bounds == bounds of x + u from h5py.

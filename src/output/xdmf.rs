@@ -34,14 +34,12 @@ pub enum Center {
 
 /// Shape of one attribute row: 1, 3 or 6 components.
 /// `Tensor6` carries alfe's Voigt order xx, yy, zz, xy, yz, xz, which is VTK's symmetric-tensor
-/// order. XDMF has no component names. ParaView 5.11's Xdmf3 readers (`Xdmf3ReaderS`,
-/// `Xdmf3ReaderT`) keep the six columns in order, set no names and no tensors attribute,
-/// and show their default names for a 6-component array, XX, YY, ZZ, XY, YZ, XZ (colour-by
+/// order, and is declared to XDMF as a `Matrix` of six columns: ParaView 5.11's three XDMF
+/// readers then keep the columns in order and name them XX, YY, ZZ, XY, YZ, XZ (colour-by
 /// menu, Calculator's `stress_XY`; the spreadsheet says `stress_0` .. `stress_5`): alfe's.
-/// Its legacy "XDMF Reader" (`XDMFReader`) reads `Tensor6` in XDMF's own order xx, xy, xz,
-/// yy, yz, zz and expands it to a 3x3 tensor that is wrong for alfe's columns; declared
-/// `Matrix`, the same file reads as the six columns in all three (tried by hand).
-/// scripts/check-paraview checks the names and the legacy reader's expansion.
+/// Declared `Tensor6` (XDMF's own symmetric tensor, whose order is xx, xy, xz, yy, yz, zz),
+/// the Xdmf3 readers did the same but the legacy "XDMF Reader" expanded the columns into a
+/// wrong 3x3 tensor. scripts/check-paraview checks the names in every reader.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum AttrKind {
     Scalar,
@@ -62,7 +60,7 @@ impl AttrKind {
         match self {
             AttrKind::Scalar => "Scalar",
             AttrKind::Vector => "Vector",
-            AttrKind::Tensor6 => "Tensor6",
+            AttrKind::Tensor6 => "Matrix",
         }
     }
 }
@@ -572,7 +570,7 @@ print(json.dumps(out))
                 serde_json::json!([
                     ["partition", "Scalar", "Cell"],
                     ["displacement", "Vector", "Node"],
-                    ["stress", "Tensor6", "Cell"],
+                    ["stress", "Matrix", "Cell"],
                     ["von_mises", "Scalar", "Cell"]
                 ])
             );
