@@ -39,6 +39,8 @@ enum Command {
         /// Partition for this many ranks and report its quality.
         #[arg(short = 'n', long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..))]
         ranks: u32,
+        #[command(flatten)]
+        study: StudyArgs,
     },
     /// Write the METIS partition for a rank count to the partition cache.
     Partition {
@@ -132,6 +134,33 @@ struct RunArgs {
     /// End the run after this step, as if interrupted (it can go on with --restart).
     #[arg(long, value_name = "STEP")]
     stop_after: Option<usize>,
+    #[command(flatten)]
+    study: StudyArgs,
+}
+
+/// A study's changes to the deck, without editing it (scripts/study uses them).
+#[derive(clap::Args, Debug)]
+struct StudyArgs {
+    /// Multiply the cells of every generated mesh by K (a direction with one cell keeps
+    /// it; blocks divide their cell size; Gmsh meshes cannot be refined).
+    #[arg(long, value_name = "K", default_value_t = 1)]
+    refine: usize,
+    /// Multiply every increment (step, min_step, max_step) by F.
+    #[arg(long, value_name = "F", default_value_t = 1.0)]
+    step_scale: f64,
+    /// Set every wall's, entity's and pair's penalty_scale (with --contact penalty).
+    #[arg(long, value_name = "S")]
+    penalty_scale: Option<f64>,
+}
+
+impl StudyArgs {
+    fn overrides(&self) -> alfe::scene::Overrides {
+        alfe::scene::Overrides {
+            refine: self.refine,
+            step_scale: self.step_scale,
+            penalty_scale: self.penalty_scale,
+        }
+    }
 }
 
 #[derive(ValueEnum, Clone, Copy, Debug)]
@@ -257,6 +286,7 @@ fn main_inner(comm: &dyn Comm, raw: Vec<String>) -> Result<()> {
                 iterations: a.iterations,
                 restart: a.restart,
                 stop_after: a.stop_after,
+                overrides: a.study.overrides(),
             };
             let s = app::run(comm, &opts)?.summary;
             say(&s.headline());
@@ -289,9 +319,14 @@ fn main_inner(comm: &dyn Comm, raw: Vec<String>) -> Result<()> {
             }
             Ok(())
         }
-        Command::Check { target: t, ranks } => {
+        Command::Check {
+            target: t,
+            ranks,
+            study,
+        } => {
             let t = target(t);
-            let r = app::on_rank0(comm, || app::check(&t, ranks as usize))?;
+            let o = study.overrides();
+            let r = app::on_rank0(comm, || app::check(&t, ranks as usize, &o))?;
             if let Some(s) = r {
                 print!("{s}");
             }

@@ -42,6 +42,7 @@ fn solve_with(
         iterations: false,
         restart: None,
         stop_after: None,
+        overrides: alfe::scene::Overrides::default(),
     };
     let Setup { mut model, run, .. } = setup(comm, &ro, &mut Phases::default()).unwrap();
     let mut opts = run.solver.clone();

@@ -103,6 +103,7 @@ fn run_in(name: &str, text: &str, contact: Option<ContactMethod>) -> (RunOutcome
         iterations: false,
         restart: None,
         stop_after: None,
+        overrides: alfe::scene::Overrides::default(),
     };
     let o = run(&SerialComm, &opts).unwrap_or_else(|e| panic!("{name}: {e}"));
     (o, out)

@@ -249,7 +249,9 @@ fn mutated_decks_are_refused_naming_where() {
             dir: PathBuf::from("."),
             label: format!("fuzz-{case}"),
         };
-        let res = catch_unwind(AssertUnwindSafe(|| alfe::app::check_source(&src, 1)));
+        let res = catch_unwind(AssertUnwindSafe(|| {
+            alfe::app::check_source(&src, 1, &alfe::scene::Overrides::default())
+        }));
         match res {
             Err(_) => {
                 let keep = std::env::temp_dir().join(format!("alfe-fuzz-case-{case}.toml"));

@@ -204,6 +204,7 @@ fn a_busy_output_directory_is_refused() {
         iterations: false,
         restart: None,
         stop_after: None,
+        overrides: alfe::scene::Overrides::default(),
     };
     let e = alfe::app::run(&alfe::parallel::SerialComm, &opts)
         .err()

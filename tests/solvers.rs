@@ -34,6 +34,7 @@ fn run_with(name: &str, text: &str, solver: SolverKind) -> alfe::app::RunOutcome
         iterations: false,
         restart: None,
         stop_after: None,
+        overrides: alfe::scene::Overrides::default(),
     };
     alfe::app::run(&SerialComm, &opts).unwrap_or_else(|e| panic!("{name}: {e}"))
 }

@@ -47,6 +47,8 @@ pub struct RunOptions {
     pub restart: Option<PathBuf>,
     /// End the run after this step (as if interrupted; resumable with `restart`).
     pub stop_after: Option<usize>,
+    /// A study's changes to the deck (`--refine`, `--step-scale`, `--penalty-scale`).
+    pub overrides: crate::scene::Overrides,
 }
 
 impl RunOptions {
@@ -63,6 +65,7 @@ impl RunOptions {
             iterations: false,
             restart: None,
             stop_after: None,
+            overrides: crate::scene::Overrides::default(),
         }
     }
 }
@@ -124,6 +127,9 @@ pub struct Summary {
     pub restarted_from: Option<serde_json::Value>,
     /// The run was stopped after a step on request (`--stop-after`).
     pub stopped: bool,
+    /// The scene's quantities of interest over this run (rank 0's summary).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub quantities: Vec<crate::output::quantities::QuantityValue>,
 }
 
 impl Summary {
@@ -263,7 +269,7 @@ pub fn setup(comm: &dyn Comm, opts: &RunOptions, phases: &mut Phases) -> Result<
         let Scene {
             model: mut def,
             mut run,
-        } = crate::scene::read(&src)?;
+        } = crate::scene::read_with(&src, &opts.overrides)?;
         if let Some(m) = opts.contact {
             for c in &mut def.contributions {
                 c.kind_mut().set_contact_method(m);
@@ -499,6 +505,20 @@ fn execute(
             "--restart: explicit runs cannot be restarted (static and implicit ones can)",
         ));
     }
+    let header = crate::output::results::history_columns(
+        &model,
+        analysis.is_dynamic(),
+        !analysis.stages.is_empty(),
+    );
+    if let Some((i, c)) = crate::output::quantities::missing_columns(&settings.quantities, &header)
+        .into_iter()
+        .next()
+    {
+        return Err(Error::input(format!(
+            "quantities[{i}].expression: this run has no history column `{c}` (its columns: {})",
+            header.join(", ")
+        )));
+    }
     let t0 = restart.as_ref().map_or(0.0, |r| r.time);
     if let Some(r) = &restart {
         log.line(&format!(
@@ -667,6 +687,20 @@ fn execute(
     let rss = comm.allgather_f64(peak_rss_mb());
     let message = totals.failure.clone().unwrap_or_else(|| "converged".into());
     let contributions = contributions_summary(&model, &records);
+    // The quantities of interest, from the history as written (rank 0).
+    let quantities = if comm.rank() == 0 && !settings.quantities.is_empty() {
+        match crate::output::results::read_history(out) {
+            Ok((head, rows)) => {
+                crate::output::quantities::evaluate(&settings.quantities, &head, &rows)
+            }
+            Err(_) => Vec::new(),
+        }
+    } else {
+        Vec::new()
+    };
+    for line in crate::output::quantities::report(&quantities) {
+        log.line(&line);
+    }
     let summary = Summary {
         scene: scene.clone(),
         units: settings.units.describe().into(),
@@ -732,6 +766,7 @@ fn execute(
             serde_json::json!({"dir": r.dir.display().to_string(), "step": r.step, "time": r.time})
         }),
         stopped: totals.stopped,
+        quantities,
     };
     drop(writer);
     let r = if comm.rank() == 0 {
@@ -834,13 +869,17 @@ fn contributions_summary(
 }
 
 /// `alfe check`: validate and report the model size and partition quality (serial).
-pub fn check(target: &str, ranks: usize) -> Result<String> {
-    check_source(&crate::scene::load(target)?, ranks)
+pub fn check(target: &str, ranks: usize, o: &crate::scene::Overrides) -> Result<String> {
+    check_source(&crate::scene::load(target)?, ranks, o)
 }
 
 /// [`check`] of a deck's text (the deck fuzzer calls it for thousands of decks).
-pub fn check_source(src: &crate::scene::Source, ranks: usize) -> Result<String> {
-    let scene = crate::scene::read(src)?;
+pub fn check_source(
+    src: &crate::scene::Source,
+    ranks: usize,
+    o: &crate::scene::Overrides,
+) -> Result<String> {
+    let scene = crate::scene::read_with(src, o)?;
     let def = &scene.model;
     let mut s = describe(def, &scene.run);
     if ranks > 1 {

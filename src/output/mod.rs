@@ -6,6 +6,7 @@ pub mod h5;
 pub mod iterations;
 pub mod lock;
 pub mod log;
+pub mod quantities;
 pub mod record;
 pub mod results;
 pub mod xdmf;

@@ -119,6 +119,42 @@ fn write_paths(
     Ok(at)
 }
 
+/// The columns of `history.csv` a run of `model` writes (what quantities of interest may
+/// read).
+pub fn history_columns(model: &Model, dynamic: bool, staged: bool) -> Vec<String> {
+    let columns: Vec<String> = model.columns().iter().map(|c| c.name.clone()).collect();
+    history_header(
+        &model.reaction_sets,
+        &model.displacement_sets,
+        dynamic,
+        staged,
+        &columns,
+    )
+    .split(',')
+    .map(String::from)
+    .collect()
+}
+
+/// `history.csv` of `dir` as its header and rows of numbers.
+pub fn read_history(dir: &Path) -> std::io::Result<(Vec<String>, Vec<Vec<f64>>)> {
+    let text = std::fs::read_to_string(dir.join("history.csv"))?;
+    let mut lines = text.lines();
+    let header: Vec<String> = lines
+        .next()
+        .unwrap_or_default()
+        .split(',')
+        .map(String::from)
+        .collect();
+    let rows = lines
+        .map(|l| {
+            l.split(',')
+                .map(|v| v.parse().unwrap_or(f64::NAN))
+                .collect()
+        })
+        .collect();
+    Ok((header, rows))
+}
+
 /// The header of `history.csv` (README "Outputs"); [`history_row`] writes the rows.
 /// `columns` are the contributions' columns (wall forces, contact counts, ...).
 pub(crate) fn history_header(

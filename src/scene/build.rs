@@ -730,10 +730,9 @@ pub fn build(deck: &Deck, deck_dir: &Path) -> Result<Scene> {
         peak_stress_parts,
         initial_velocity,
     };
-    Ok(Scene {
-        model,
-        run: run_settings(deck, &timeline),
-    })
+    let mut run = run_settings(deck, &timeline);
+    run.quantities = quantities(deck)?;
+    Ok(Scene { model, run })
 }
 
 /// `[analysis]`, `[solver]` and `[output]` with their defaults filled in (validated).
@@ -868,7 +867,67 @@ fn run_settings(deck: &Deck, timeline: &super::steps::Timeline) -> RunSettings {
             iterations: deck.output.iterations,
         },
         echo: String::new(),
+        quantities: Vec::new(),
     }
+}
+
+/// The deck's quantities of interest, each expression parsed; errors name the field.
+fn quantities(deck: &Deck) -> Result<Vec<crate::output::quantities::QuantityDef>> {
+    use crate::output::quantities::{parse, QuantityDef, When};
+    unique_names(
+        "quantities",
+        deck.quantities.iter().map(|q| q.name.as_str()),
+    )?;
+    deck.quantities
+        .iter()
+        .enumerate()
+        .map(|(i, q)| {
+            let f = format!("quantities[{i}]");
+            let expr = parse(&q.expression).map_err(|e| err(format!("{f}.expression"), e))?;
+            let when = match (q.at, q.over) {
+                (Some(_), Some(_)) => {
+                    return Err(err(&f, "give `at` (a time) or `over` (the run), not both"))
+                }
+                (Some(t), None) if t.is_finite() => When::At(t),
+                (Some(t), None) => {
+                    return Err(err(
+                        format!("{f}.at"),
+                        format!("expected a finite time, got {t}"),
+                    ))
+                }
+                (None, Some(OverDeck::Max)) => When::Max,
+                (None, Some(OverDeck::Min)) => When::Min,
+                (None, Some(OverDeck::MaxAbs)) => When::MaxAbs,
+                (None, Some(OverDeck::Last)) | (None, None) => When::Last,
+            };
+            if q.reference.is_some_and(|r| !r.is_finite()) {
+                return Err(err(format!("{f}.reference"), "expected a finite number"));
+            }
+            if let Some(t) = q.tolerance {
+                if !(t.is_finite() && t >= 0.0) {
+                    return Err(err(
+                        format!("{f}.tolerance"),
+                        format!("expected a relative tolerance ≥ 0, got {t}"),
+                    ));
+                }
+                if q.reference.is_none() {
+                    return Err(err(
+                        format!("{f}.tolerance"),
+                        "a tolerance needs a `reference`",
+                    ));
+                }
+            }
+            Ok(QuantityDef {
+                name: q.name.clone(),
+                text: q.expression.clone(),
+                expr,
+                when,
+                reference: q.reference,
+                tolerance: q.tolerance,
+                description: q.description.clone(),
+            })
+        })
+        .collect()
 }
 
 /// The most elements a generated part may have (2e7: tens of GB before solving).

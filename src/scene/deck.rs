@@ -36,6 +36,10 @@ pub struct Deck {
     /// Initial velocities of dynamic analyses (later entries win where sets overlap).
     #[serde(default)]
     pub initial_velocity: Vec<InitialVelocityDeck>,
+    /// Quantities of interest: the scene's answers, with references where known
+    /// (`output::quantities`).
+    #[serde(default)]
+    pub quantities: Vec<QuantityDeck>,
     /// Rigid walls (contact, DESIGN.md "Contact kinds").
     #[serde(default)]
     pub walls: Vec<super::walls::WallDeck>,
@@ -728,6 +732,35 @@ pub struct OutputDeck {
     /// `iterations.csv` (also `alfe run --iterations`).
     #[serde(default)]
     pub iterations: bool,
+}
+
+/// One quantity of interest: `expression` over the history's columns, taken `at` a time or
+/// `over` the run (`last`, the default; `max`, `min`, `max_abs`), with an optional
+/// `reference` and relative `tolerance`.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct QuantityDeck {
+    pub name: String,
+    pub expression: String,
+    #[serde(default)]
+    pub at: Option<f64>,
+    #[serde(default)]
+    pub over: Option<OverDeck>,
+    #[serde(default)]
+    pub reference: Option<f64>,
+    #[serde(default)]
+    pub tolerance: Option<f64>,
+    #[serde(default)]
+    pub description: String,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum OverDeck {
+    Last,
+    Max,
+    Min,
+    MaxAbs,
 }
 
 fn yes() -> bool {

@@ -7,6 +7,7 @@ pub mod build;
 pub mod coupling;
 pub mod deck;
 mod dynamics;
+pub mod overrides;
 pub mod pairs;
 pub mod steps;
 pub mod walls;
@@ -15,6 +16,7 @@ use crate::model::def::ModelDef;
 use crate::solve::nonlinear::NonlinearOptions;
 use crate::solve::Analysis;
 use crate::{Error, Result};
+pub use overrides::Overrides;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
@@ -40,6 +42,9 @@ pub struct RunSettings {
     /// The deck as read, defaults filled in (TOML), for the run's record (`deck.toml`).
     #[serde(default)]
     pub echo: String,
+    /// The scene's quantities of interest.
+    #[serde(default)]
+    pub quantities: Vec<crate::output::quantities::QuantityDef>,
 }
 
 /// When fields are written.
@@ -222,8 +227,14 @@ pub fn load(name_or_path: &str) -> Result<Source> {
 
 /// Parse, build and validate a scene.
 pub fn read(src: &Source) -> Result<Scene> {
-    let deck =
+    read_with(src, &Overrides::default())
+}
+
+/// [`read`] with a study's changes to the deck ([`Overrides`]) made before it is built.
+pub fn read_with(src: &Source, o: &Overrides) -> Result<Scene> {
+    let mut deck =
         deck::parse(&src.text).map_err(|e| Error::input(format!("deck {}: {e}", src.label)))?;
+    o.apply(&mut deck)?;
     let mut scene =
         build::build(&deck, &src.dir).map_err(|e| e.context(format!("deck {}", src.label)))?;
     scene.run.echo = echo(&deck, &src.dir);

@@ -43,6 +43,7 @@ pub fn try_run_deck(name: &str, text: &str) -> alfe::Result<RunOutcome> {
         iterations: false,
         restart: None,
         stop_after: None,
+        overrides: alfe::scene::Overrides::default(),
     };
     run(&SerialComm, &opts)
 }

@@ -1,0 +1,124 @@
+//! Changes a study makes to a deck without editing it (`alfe run --refine K
+//! --step-scale F --penalty-scale S`, issue 17): the same scene on a finer mesh, with
+//! other increments, or with another penalty stiffness.
+
+use super::deck::{Deck, MeshDeck};
+use crate::{Error, Result};
+
+/// What to change; the default changes nothing.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Overrides {
+    /// Cells of every generated mesh multiplied by this (1: none). A direction with one
+    /// cell keeps it (a plane-strain slice, one element through a thin wall); `blocks`
+    /// divide their cell sizes, sheets from a surface mesh multiply their layers only
+    /// where they have more than one, Gmsh volumes cannot be refined.
+    pub refine: usize,
+    /// `[analysis]` and every `[[steps]]` increment (step, min_step, max_step) times this.
+    pub step_scale: f64,
+    /// The penalty stiffness of every wall, entity and pair (`penalty_scale`), where set.
+    pub penalty_scale: Option<f64>,
+}
+
+impl Default for Overrides {
+    fn default() -> Self {
+        Self {
+            refine: 1,
+            step_scale: 1.0,
+            penalty_scale: None,
+        }
+    }
+}
+
+impl Overrides {
+    pub fn is_none(&self) -> bool {
+        *self == Self::default()
+    }
+
+    /// Check the values themselves (the flags that set them are named).
+    pub fn validate(&self) -> Result<()> {
+        if self.refine == 0 || self.refine > 64 {
+            return Err(Error::input(format!(
+                "--refine: expected a factor from 1 to 64, got {}",
+                self.refine
+            )));
+        }
+        if !(self.step_scale.is_finite() && self.step_scale > 0.0) {
+            return Err(Error::input(format!(
+                "--step-scale: expected a positive factor, got {}",
+                self.step_scale
+            )));
+        }
+        if let Some(p) = self.penalty_scale {
+            if !(p.is_finite() && p > 0.0) {
+                return Err(Error::input(format!(
+                    "--penalty-scale: expected a positive factor, got {p}"
+                )));
+            }
+        }
+        Ok(())
+    }
+
+    /// Apply to a parsed deck. Refining a deck that has a Gmsh volume mesh is refused:
+    /// its mesh is the user's.
+    pub fn apply(&self, deck: &mut Deck) -> Result<()> {
+        self.validate()?;
+        let k = self.refine;
+        let up = |n: &mut usize| {
+            if *n > 1 {
+                *n *= k;
+            }
+        };
+        if k > 1 {
+            for (i, p) in deck.parts.iter_mut().enumerate() {
+                match &mut p.mesh {
+                    MeshDeck::Box { cells, .. }
+                    | MeshDeck::ExtrudedQuad { cells, .. }
+                    | MeshDeck::Ring { cells, .. } => cells.iter_mut().for_each(up),
+                    MeshDeck::Cylinder {
+                        cells_radial,
+                        cells_axial,
+                        ..
+                    } => {
+                        *cells_radial *= k;
+                        up(cells_axial);
+                    }
+                    MeshDeck::Blocks {
+                        cell_size, refine, ..
+                    } => {
+                        *cell_size /= k as f64;
+                        for r in refine {
+                            r.cell_size /= k as f64;
+                        }
+                    }
+                    MeshDeck::Sheet { layers, .. } => up(layers),
+                    MeshDeck::Gmsh { .. } => {
+                        return Err(Error::input(format!(
+                            "--refine: parts[{i}] is a Gmsh mesh, which alfe cannot refine"
+                        )))
+                    }
+                }
+            }
+        }
+        if self.step_scale != 1.0 {
+            let f = self.step_scale;
+            let a = &mut deck.analysis;
+            a.step *= f;
+            a.min_step = a.min_step.map(|x| x * f);
+            a.max_step = a.max_step.map(|x| x * f);
+            for s in &mut deck.steps {
+                s.step = s.step.map(|x| x * f);
+                s.min_step = s.min_step.map(|x| x * f);
+                s.max_step = s.max_step.map(|x| x * f);
+            }
+        }
+        if let Some(p) = self.penalty_scale {
+            for w in deck.walls.iter_mut().chain(deck.entities.iter_mut()) {
+                w.penalty_scale = p;
+            }
+            for pr in &mut deck.pairs {
+                pr.penalty_scale = p;
+            }
+        }
+        Ok(())
+    }
+}
