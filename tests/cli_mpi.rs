@@ -1607,3 +1607,40 @@ fn partition_files_are_read_with_a_size_limit() {
         "{se}"
     );
 }
+
+/// Hybrid elements with hypre's AMG on 2 ranks (auto does not take AMG for them, a deck
+/// may): the pressure blocks of elements that straddle the ranks are condensed too (AMG
+/// refuses a matrix with a negative diagonal), and the answers are the 1-rank ones.
+#[test]
+fn hybrid_elements_with_amg_on_two_ranks() {
+    let dir = temp_dir("rank-hybrid-amg");
+    let deck = builtin("twisted-block") + "\n[solver.linear]\npreconditioner = \"amg\"\n";
+    std::fs::write(dir.join("twist.toml"), &deck).unwrap();
+    ok(alfe(
+        &dir,
+        1,
+        &["run", "twisted-block", "--out", "one", "--quiet"],
+    ));
+    ok(alfe(
+        &dir,
+        2,
+        &[
+            "run",
+            "twist.toml",
+            "--out",
+            "two",
+            "--partitions",
+            "parts",
+            "--quiet",
+        ],
+    ));
+    let s = read_json(&dir.join("two/summary.json"));
+    assert_eq!(s["preconditioner"], "amg", "{s}");
+    assert_same_runs_within(
+        &dir.join("one"),
+        &dir.join("two"),
+        "twisted-block",
+        false,
+        1e-6,
+    );
+}

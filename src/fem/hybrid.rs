@@ -36,7 +36,7 @@
 //! norms treat all unknowns alike), and the pressure rows are scaled by s to forces. The
 //! pressure takes the first entry of a block of three; the other two are inert unknowns
 //! with the pressure row's diagonal (`−s² V/K₀`), so the block's diagonal stays negative
-//! definite for the condensation of [`crate::linalg::condense`], which eliminates it
+//! definite for the condensation (`linalg/condense.rs`), which eliminates it
 //! exactly: the factored matrix has only the displacements.
 
 use super::element::{

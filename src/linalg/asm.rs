@@ -131,7 +131,8 @@ impl RestrictedSchwarz {
             row_ptr: Vec::with_capacity(n_own + n_ghost + 1),
             cols: Vec::with_capacity(nnz_blocks),
             entries: Vec::with_capacity(nnz_blocks),
-            // Element blocks are never ghosts: only owned rows can be.
+            // Only owned element rows are marked: a neighbour's pressure block that is a
+            // ghost here stays in the overlap's factor as it is.
             element_rows: (0..n_own + n_ghost)
                 .map(|i| i < n_own && mat.is_element_row(i))
                 .collect(),

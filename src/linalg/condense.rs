@@ -51,9 +51,10 @@ pub const REGULARIZATION: f64 = 1e-6;
 /// by a rigid body: the node and the body's translation and rotation blocks)...
 const MAX_NEIGHBOURS: usize = 4;
 /// ... or, for a row marked as an element's own ([`LocalBlockPattern::element_rows`]: a
-/// hybrid hex8's pressure block), exactly its 8 nodes. Only marked rows: a corner node
-/// of a hex mesh that a rigid body also couples to has 8 mutually coupled neighbours
-/// too, and is no algebraic unknown (eliminating it would only perturb the factor by δ).
+/// hybrid hex8's pressure block), up to its 8 nodes (those this block holds). Only marked
+/// rows: a corner node of a hex mesh that a rigid body also couples to has 8 mutually
+/// coupled neighbours too, and is no algebraic unknown (eliminating it would only
+/// perturb the factor by δ). Marked rows are not regularized: their D is definite.
 const ELEMENT_NEIGHBOURS: usize = 8;
 
 /// One attached block row `m`: its diagonal entry and its neighbours
@@ -68,6 +69,9 @@ struct Pair {
     /// This pair's start in [`Condensation::fill`]: k × k reduced entries (x, y) for
     /// its k neighbours, row-major.
     fill: usize,
+    /// An element's own block (a pressure block): D is never singular, so it is not
+    /// regularized, and what is factored is the condensed element exactly.
+    element: bool,
 }
 
 /// A neighbour `x` of an attached row `m`.
@@ -107,7 +111,7 @@ impl Condensation {
     /// The attached block rows of `pat`, or `None` if there are none.
     ///
     /// A block row `m` is attached if its row and column have the same blocks (its
-    /// diagonal and at most [`MAX_NEIGHBOURS`] neighbours, or an element row's exactly
+    /// diagonal and at most [`MAX_NEIGHBOURS`] neighbours, an element row's at most
     /// [`ELEMENT_NEIGHBOURS`]), every pair of its
     /// neighbours is already coupled (so eliminating it fills nothing new), and no
     /// neighbour is eliminated itself (rows are taken from the highest index down, so
@@ -128,8 +132,10 @@ impl Condensation {
         let mut nb: Vec<(usize, usize)> = Vec::with_capacity(ELEMENT_NEIGHBOURS);
         'rows: for m in (0..n).rev() {
             let len = row(m).len();
+            // An element row sees only the nodes of its element this block holds (5 to
+            // 8 where the element straddles ranks).
             let sized = (2..=MAX_NEIGHBOURS + 1).contains(&len)
-                || (len == ELEMENT_NEIGHBOURS + 1 && pat.is_element_row(m));
+                || (pat.is_element_row(m) && (2..=ELEMENT_NEIGHBOURS + 1).contains(&len));
             if !sized || col_count[m] != len {
                 continue;
             }
@@ -226,6 +232,7 @@ impl Condensation {
                 e_mm,
                 nb: range,
                 fill: at,
+                element: pat.is_element_row(m),
             });
         }
         let (np, nn) = (out.len(), nbrs.len());
@@ -278,8 +285,10 @@ impl Condensation {
                 s = s.max(absmax(&blk(nb.e_xm))).max(absmax(&blk(nb.e_mx)));
             }
             let sigma = if d[0] + d[4] + d[8] > 0.0 { 1.0 } else { -1.0 };
-            for i in 0..3 {
-                d[4 * i] += sigma * delta * s;
+            if !p.element {
+                for i in 0..3 {
+                    d[4 * i] += sigma * delta * s;
+                }
             }
             let dinv = inverse3(&d).ok_or_else(|| {
                 format!(

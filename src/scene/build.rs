@@ -766,6 +766,25 @@ pub fn amg_unsuited(deck: &Deck) -> Option<String> {
             m.name, m.nu
         ));
     }
+    // Hybrid elements (a deck's choice, or auto's at ν ≥ 0.45): their pressure blocks are
+    // condensed before AMG, which then sees F-bar's nearly incompressible matrix.
+    if let Some(p) = deck.parts.iter().find(|p| {
+        p.formulation == FormulationDeck::Hybrid
+            || (p.formulation == FormulationDeck::Auto
+                && deck
+                    .materials
+                    .iter()
+                    .find(|m| m.name == p.material)
+                    .is_some_and(|m| {
+                        m.nu >= 0.45
+                            && matches!(
+                                m.model,
+                                MaterialModel::MooneyRivlin | MaterialModel::NeoHookean
+                            )
+                    }))
+    }) {
+        return Some(format!("part '{}' has hybrid elements", p.name));
+    }
     if let Some(m) = deck.materials.iter().find(|m| m.model == MaterialModel::J2) {
         return Some(format!("material '{}' is plastic (j2)", m.name));
     }

@@ -300,13 +300,7 @@ mod tests {
                 super::build::build(&d, std::path::Path::new(".")).unwrap(),
             )
         };
-        for name in [
-            "hertz-sphere",
-            "cantilever",
-            "cube-stretch",
-            "twisted-block",
-            "patch-hex8",
-        ] {
+        for name in ["hertz-sphere", "cantilever", "cube-stretch", "patch-hex8"] {
             let (reason, scene) = why(name);
             assert_eq!(reason, None, "{name}");
             // The built-in deck does not name a preconditioner; its run settings keep auto.
@@ -318,6 +312,7 @@ mod tests {
             ("cook-membrane", "nearly incompressible"),
             ("plastic-bar", "plastic (j2)"),
             ("coupled-cantilever", "[[couplings]]"),
+            ("twisted-block", "hybrid elements"),
         ] {
             let (reason, scene) = why(name);
             let reason = reason.unwrap_or_default();
