@@ -132,8 +132,8 @@ struct RunArgs {
     #[arg(long, value_name = "DIR")]
     restart: Option<PathBuf>,
     /// End the run after this step, as if interrupted (it can go on with --restart).
-    #[arg(long, value_name = "STEP")]
-    stop_after: Option<usize>,
+    #[arg(long, value_name = "STEP", value_parser = clap::value_parser!(u64).range(1..))]
+    stop_after: Option<u64>,
     #[command(flatten)]
     study: StudyArgs,
 }
@@ -285,7 +285,7 @@ fn main_inner(comm: &dyn Comm, raw: Vec<String>) -> Result<()> {
                 solver: a.solver.map(SolverArg::kind),
                 iterations: a.iterations,
                 restart: a.restart,
-                stop_after: a.stop_after,
+                stop_after: a.stop_after.map(|n| n as usize),
                 overrides: a.study.overrides(),
             };
             let s = app::run(comm, &opts)?.summary;

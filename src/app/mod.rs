@@ -387,7 +387,14 @@ pub fn run(comm: &dyn Comm, opts: &RunOptions) -> Result<RunOutcome> {
     };
     let out = match (&opts.out, &opts.restart) {
         (Some(o), _) => o.clone(),
-        (None, Some(dir)) => PathBuf::from(format!("{}-restart", dir.display())),
+        (None, Some(dir)) => {
+            // `results/` restarts into `results-restart`, beside it.
+            let name = dir.file_name().map_or_else(
+                || "restart".to_string(),
+                |n| format!("{}-restart", n.to_string_lossy()),
+            );
+            dir.parent().unwrap_or(std::path::Path::new("")).join(name)
+        }
         (None, None) => PathBuf::from("out").join(&settings.name),
     };
     if let Some(dir) = &opts.restart {
@@ -528,6 +535,19 @@ fn execute(
             r.time
         ));
     }
+    // The earlier run's history up to the restart, so quantities cover the whole run.
+    let earlier = match &restart {
+        Some(r) => match writer.carry_history(comm, &r.dir, r.step)? {
+            Ok(rows) => rows,
+            Err(why) => {
+                log.line(&format!(
+                    "warning: {why}; history.csv and the quantities begin at the restart"
+                ));
+                Vec::new()
+            }
+        },
+        None => Vec::new(),
+    };
     let mut progress =
         progress::Progress::new(std::mem::replace(log, Log::silent()), &model, t0, end_time);
     let deck_print = crate::output::checkpoint::fingerprint(&settings.echo);
@@ -628,6 +648,19 @@ fn execute(
     } else {
         // (analysis step, increments of it so far)
         let mut stage_seen = (0usize, 0usize);
+        // After a restart, counted on from the earlier run's rows (rank 0 read them;
+        // every rank must agree on which steps write fields).
+        if restart.is_some() {
+            let mut seen = [0.0, 0.0];
+            if let Some(k) = header.iter().position(|h| h == "analysis_step") {
+                if let Some(&stage) = earlier.last().and_then(|r| r.get(k)) {
+                    let n = earlier.iter().filter(|r| r.get(k) == Some(&stage)).count();
+                    seen = [(stage - 1.0).max(0.0), n as f64];
+                }
+            }
+            comm.allreduce_max(&mut seen);
+            stage_seen = (seen[0] as usize, seen[1] as usize);
+        }
         if let Some(r) = &restart {
             u = r.u.clone();
         }
@@ -671,7 +704,12 @@ fn execute(
     *log = progress.log;
     let totals = totals?;
     let failed: Vec<&Attempt> = totals.failed_last.iter().collect();
-    iters.step(records.last().map_or(0, |r| r.step) + 1, &failed, false);
+    let last_step = records
+        .last()
+        .map(|r| r.step)
+        .or(restart.as_ref().map(|r| r.step))
+        .unwrap_or(0);
+    iters.step(last_step + 1, &failed, false);
     phases.assembly = totals.seconds_assembly;
     phases.linear_solve = totals.seconds_linear;
     phases.output = writer.seconds;
@@ -686,14 +724,20 @@ fn execute(
     comm.allreduce_max(&mut ph);
     let rss = comm.allgather_f64(peak_rss_mb());
     let message = totals.failure.clone().unwrap_or_else(|| "converged".into());
-    let contributions = contributions_summary(&model, &records);
+    let contributions = contributions_summary(&model, &records, &header, &earlier);
     // The quantities of interest, from the history as written (rank 0).
     let quantities = if comm.rank() == 0 && !settings.quantities.is_empty() {
         match crate::output::results::read_history(out) {
             Ok((head, rows)) => {
                 crate::output::quantities::evaluate(&settings.quantities, &head, &rows)
             }
-            Err(_) => Vec::new(),
+            Err(e) => {
+                log.line(&format!(
+                    "warning: cannot read {} for the quantities: {e}",
+                    out.join("history.csv").display()
+                ));
+                Vec::new()
+            }
         }
     } else {
         Vec::new()
@@ -827,7 +871,10 @@ fn load_restart(
             c.scene,
             dir.join("deck.toml").display()
         ))
-    } else if c.first_dof != model.dofs.dofs.start() || c.n_dofs != model.n_owned_dofs() {
+    } else if c.first_dof != model.dofs.dofs.start()
+        || c.n_dofs != model.n_owned_dofs()
+        || c.u.len() != c.n_dofs
+    {
         Some("the restart files were written on another partition of the model".into())
     } else {
         model.restore_state(&c.model).err().map(|e| e.message)
@@ -850,15 +897,25 @@ fn load_restart(
 fn contributions_summary(
     model: &Model,
     records: &[StepRecord],
+    header: &[String],
+    earlier: &[Vec<f64>],
 ) -> BTreeMap<String, serde_json::Value> {
     let cols = model.columns();
     let mut out = BTreeMap::new();
     for (i, c) in cols.iter().enumerate() {
         if c.run_max {
+            // `earlier`: history rows of the run this one restarted from.
+            let before = header.iter().position(|h| *h == c.name).map_or(0.0, |k| {
+                earlier
+                    .iter()
+                    .filter_map(|r| r.get(k))
+                    .filter(|v| v.is_finite())
+                    .fold(0.0, |a: f64, &b| a.max(b))
+            });
             let m = records
                 .iter()
                 .filter_map(|r| r.columns.get(i))
-                .fold(0.0, |a: f64, &b| a.max(b));
+                .fold(before, |a: f64, &b| a.max(b));
             out.insert(c.name.clone(), serde_json::json!(m));
         }
     }

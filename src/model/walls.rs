@@ -694,6 +694,11 @@ impl Contribution for Wall {
             }
         }
         s.extend(self.ft_old.iter().flatten());
+        // Contact and stick at the last evaluation: the next step's first evaluation
+        // counts stick/slip flips against them.
+        for c in &self.last {
+            s.extend([c.active as u8 as f64, c.sticking as u8 as f64]);
+        }
         if let Some(b) = &self.body {
             s.extend(b.saved_state());
         }
@@ -702,7 +707,7 @@ impl Contribution for Wall {
 
     fn restore_state(&mut self, s: &[f64]) -> Result<(), String> {
         let n = self.x_old.len();
-        let want = 1 + 10 * n + if self.body.is_some() { 15 } else { 0 };
+        let want = 1 + 12 * n + if self.body.is_some() { 15 } else { 0 };
         if s.len() != want {
             return Err(format!("{} values for {want} expected", s.len()));
         }
@@ -714,13 +719,16 @@ impl Contribution for Wall {
             let o = 1 + 3 * n + 4 * j;
             self.n_old[j] = (s[o] != 0.0).then(|| [s[o + 1], s[o + 2], s[o + 3]]);
             self.ft_old[j] = three(1 + 7 * n, j);
+            let o = 1 + 10 * n + 2 * j;
+            self.last[j].active = s[o] != 0.0;
+            self.last[j].sticking = s[o + 1] != 0.0;
         }
         self.x_new.copy_from_slice(&self.x_old);
         self.n_new.copy_from_slice(&self.n_old);
         self.ft_new.copy_from_slice(&self.ft_old);
         self.flips.iter_mut().for_each(|f| *f = 0);
         if let Some(b) = &mut self.body {
-            b.restore_state(&s[1 + 10 * n..]);
+            b.restore_state(&s[1 + 12 * n..]);
         }
         Ok(())
     }

@@ -344,8 +344,12 @@ pub fn evaluate(defs: &[QuantityDef], header: &[String], rows: &[Vec<f64>]) -> V
                         .iter()
                         .position(|r| r[ti] >= t - 1e-9 * t.abs().max(1e-300))?;
                     let v1 = at_row(&rows[k]);
-                    if k == 0 || (rows[k][ti] - t).abs() <= 1e-9 * t.abs().max(1e-300) {
+                    if (rows[k][ti] - t).abs() <= 1e-9 * t.abs().max(1e-300) {
                         return Some(v1);
+                    }
+                    if k == 0 {
+                        // Before the first row written: not in the history.
+                        return None;
                     }
                     let (t0, t1) = (rows[k - 1][ti], rows[k][ti]);
                     let v0 = at_row(&rows[k - 1]);
@@ -493,6 +497,8 @@ mod tests {
         assert_eq!(v[2].within, Some(false));
         assert_eq!(v[3].value, Some(2.0));
         assert_eq!(v[4].value, None, "beyond the run");
+        let before = evaluate(&[q("w.fz", When::At(0.1), None, None)], &header, &rows[1..]);
+        assert_eq!(before[0].value, None, "before the first row");
         assert!(report(&v)[4].contains("not reached"));
         assert!(report(&v)[2].contains("OUTSIDE"));
         let missing = missing_columns(&[q("a.fz + w.fz", When::Last, None, None)], &header);

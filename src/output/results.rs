@@ -37,6 +37,8 @@ pub struct ResultsWriter {
     grids: Vec<GridOut>,
     xgrids: Vec<XdmfGrid>,
     history: Option<std::fs::File>,
+    /// The header written to `history.csv` (rank 0).
+    history_head: String,
     /// The run has analysis steps: history.csv has an `analysis_step` column.
     staged: bool,
     /// Which of the contributions' history columns are integer counts.
@@ -378,6 +380,7 @@ impl ResultsWriter {
         let xmf_path = dir.join(format!("{scene}.xmf"));
         let columns: Vec<String> = model.columns().iter().map(|c| c.name.clone()).collect();
         let mut history = None;
+        let mut history_head = String::new();
         let r = if comm.rank() == 0 {
             (|| -> Result<()> {
                 write_xdmf_with_grids(&xmf_path, &xmesh, &[], &xgrids)?;
@@ -391,6 +394,7 @@ impl ResultsWriter {
                 );
                 writeln!(f, "{head}")?;
                 history = Some(f);
+                history_head = head;
                 Ok(())
             })()
         } else {
@@ -405,6 +409,7 @@ impl ResultsWriter {
             grids,
             xgrids,
             history,
+            history_head,
             counts: model.columns().iter().map(|c| c.count).collect(),
             staged,
             n_nodes,
@@ -418,6 +423,64 @@ impl ResultsWriter {
         w.bytes_written = bytes;
         w.seconds = t0.elapsed().as_secs_f64();
         Ok(w)
+    }
+
+    /// Collective: a restarted run's history begins with the earlier run's rows up to
+    /// the step it goes on from (`dir`'s `history.csv`, same columns), so the history
+    /// and the quantities of interest cover the whole run. Returns, on rank 0, the rows
+    /// carried or why none were (the run goes on either way).
+    pub fn carry_history(
+        &mut self,
+        comm: &dyn Comm,
+        dir: &Path,
+        up_to_step: usize,
+    ) -> Result<std::result::Result<Vec<Vec<f64>>, String>> {
+        let mut carried = Ok(Vec::new());
+        let r = match self.history.as_mut() {
+            Some(f) => {
+                let path = dir.join("history.csv");
+                let head = &self.history_head;
+                let lines = std::fs::read_to_string(&path)
+                    .map_err(|e| format!("cannot read {}: {e}", path.display()))
+                    .and_then(|text| {
+                        let mut lines = text.lines();
+                        if lines.next() != Some(head.as_str()) {
+                            return Err(format!(
+                                "{} has other columns than this run",
+                                path.display()
+                            ));
+                        }
+                        Ok(lines
+                            .take_while(|l| {
+                                l.split(',')
+                                    .next()
+                                    .and_then(|x| x.parse::<usize>().ok())
+                                    .is_some_and(|k| k <= up_to_step)
+                            })
+                            .map(String::from)
+                            .collect::<Vec<_>>())
+                    });
+                let written = lines
+                    .iter()
+                    .flatten()
+                    .try_for_each(|l| writeln!(f, "{l}"))
+                    .and_then(|_| f.flush())
+                    .map_err(Error::from);
+                carried = lines.map(|ls| {
+                    ls.iter()
+                        .map(|l| {
+                            l.split(',')
+                                .map(|v| v.parse().unwrap_or(f64::NAN))
+                                .collect()
+                        })
+                        .collect()
+                });
+                written
+            }
+            None => Ok(()),
+        };
+        agree(comm, r)?;
+        Ok(carried)
     }
 
     /// Collective: the history row of a converged step (always) and, if `fields`, its

@@ -30,10 +30,6 @@ impl Default for Overrides {
 }
 
 impl Overrides {
-    pub fn is_none(&self) -> bool {
-        *self == Self::default()
-    }
-
     /// Check the values themselves (the flags that set them are named).
     pub fn validate(&self) -> Result<()> {
         if self.refine == 0 || self.refine > 64 {
@@ -65,7 +61,8 @@ impl Overrides {
         let k = self.refine;
         let up = |n: &mut usize| {
             if *n > 1 {
-                *n *= k;
+                // Saturating: the model-size check refuses what does not fit.
+                *n = n.saturating_mul(k);
             }
         };
         if k > 1 {
@@ -79,7 +76,7 @@ impl Overrides {
                         cells_axial,
                         ..
                     } => {
-                        *cells_radial *= k;
+                        *cells_radial = cells_radial.saturating_mul(k);
                         up(cells_axial);
                     }
                     MeshDeck::Blocks {

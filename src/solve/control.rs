@@ -112,6 +112,10 @@ impl StepControl {
             return None;
         }
         let mut t = snap(self.t_done + self.dt, self.end);
+        if t <= self.t_done {
+            // A step below the snapping grain (12 digits of the end time): unsnapped.
+            t = self.t_done + self.dt;
+        }
         if t > self.end * (1.0 - 1e-9) || self.end - t < 1e-3 * self.dt {
             t = self.end;
         }
@@ -235,6 +239,13 @@ mod tests {
         assert_eq!(snap(3.0 * 0.1e-3, 2e-3), 0.3e-3);
         assert_eq!(snap(7.0 * 0.1e6, 1e6), 0.7e6);
         assert_eq!(snap(1.0 / 3.0, 1.0), 0.333333333333);
+        // A step below the grain still moves on.
+        let mut c = StepControl::new(&analysis(1e-14, 1e-16, 1e-14), 20);
+        for _ in 0..3 {
+            let (t0, t1) = c.next().unwrap();
+            assert!(t1 > t0, "{t0} -> {t1}");
+            c.accept(t1, 10);
+        }
     }
 
     /// A controller resumed from another's state takes the same steps from there on.
