@@ -124,7 +124,7 @@ pub struct Summary {
     pub run: RunRecord,
     /// A restart: the directory, step and time it went on from.
     #[serde(skip_serializing_if = "Option::is_none")]
-    pub restarted_from: Option<serde_json::Value>,
+    pub restarted_from: Option<RestartedFrom>,
     /// The run was stopped after a step on request (`--stop-after`).
     pub stopped: bool,
     /// The scene's quantities of interest over this run (rank 0's summary).
@@ -132,15 +132,18 @@ pub struct Summary {
     pub quantities: Vec<crate::output::quantities::QuantityValue>,
 }
 
+/// Where a restarted run went on from (summary.json's `restarted_from`).
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct RestartedFrom {
+    pub dir: String,
+    pub step: usize,
+    pub time: f64,
+}
+
 impl Summary {
     /// The number of the last step done (a restarted run counts from its start).
     fn run_steps_end(&self) -> usize {
-        let before = self
-            .restarted_from
-            .as_ref()
-            .and_then(|r| r["step"].as_u64())
-            .unwrap_or(0) as usize;
-        before + self.steps
+        self.restarted_from.as_ref().map_or(0, |r| r.step) + self.steps
     }
 
     /// The one line a finished run ends with.
@@ -806,8 +809,10 @@ fn execute(
         message: message.clone(),
         output_dir: out.display().to_string(),
         run: record,
-        restarted_from: restart.as_ref().map(|r| {
-            serde_json::json!({"dir": r.dir.display().to_string(), "step": r.step, "time": r.time})
+        restarted_from: restart.as_ref().map(|r| RestartedFrom {
+            dir: r.dir.display().to_string(),
+            step: r.step,
+            time: r.time,
         }),
         stopped: totals.stopped,
         quantities,

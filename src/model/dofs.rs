@@ -6,9 +6,10 @@
 //!   [ owned nodes | owned extras of contribution 1 | of contribution 2 | ... ]
 //! ```
 //!
-//! where a contribution's extras are its per-node unknowns (a wall's multipliers, owned
-//! with their node) followed, on the rank that owns them, by its global unknowns (a
-//! reference point's or a rigid body's six DOFs: two blocks). A rank's *local* vectors
+//! where a contribution's extras are its per-node or per-element unknowns (a wall's
+//! multipliers, owned with their node; a hybrid element's pressure block, with its
+//! element) followed, on the rank that owns them, by its global unknowns (a reference
+//! point's or a rigid body's six DOFs: two blocks). A rank's *local* vectors
 //! hold every block it evaluates with:
 //!
 //! ```text
@@ -195,8 +196,8 @@ impl DofMap {
     pub fn n_local_dofs(&self) -> usize {
         3 * self.global.len()
     }
-    /// The owned unknowns that are not node displacements (multipliers, global
-    /// unknowns), as a range of an owned vector.
+    /// The owned unknowns that are not node displacements (multipliers, hybrid
+    /// pressures, global unknowns), as a range of an owned vector.
     pub fn extra_range(&self) -> std::ops::Range<usize> {
         self.n_node_dofs()..self.n_owned_dofs()
     }

@@ -268,8 +268,8 @@ impl Model {
         self.dofs.n_node_dofs()
     }
 
-    /// The owned unknowns that are not node displacements (multipliers, reference point
-    /// DOFs): algebraic, without mass.
+    /// The owned unknowns that are not node displacements (multipliers, hybrid
+    /// pressures, reference point DOFs): algebraic, without mass.
     pub fn extra_range(&self) -> std::ops::Range<usize> {
         self.dofs.extra_range()
     }
