@@ -260,6 +260,13 @@ pub trait Contribution {
         None
     }
 
+    /// After a failed attempt, before the cut step is tried: adapt what made it fail (a
+    /// wall softens the stick of nodes that cycled). Returns whether anything changed.
+    /// Must not change the converged answer.
+    fn after_failed_attempt(&mut self) -> bool {
+        false
+    }
+
     /// History columns (the same on every rank).
     fn columns(&self) -> Vec<Column> {
         Vec::new()

@@ -464,6 +464,14 @@ impl Model {
         comm.first_message((!mine.is_empty()).then(|| mine.join("; ")))
     }
 
+    /// After a failed attempt: each contribution adapts (see
+    /// [`Contribution::after_failed_attempt`]); local, no communication.
+    pub fn after_failed_attempt(&mut self) {
+        for c in self.each() {
+            c.after_failed_attempt();
+        }
+    }
+
     /// Every contribution's committed state (the solid elements first): what a restart
     /// file keeps besides the solution.
     pub fn saved_state(&self) -> Vec<Vec<f64>> {

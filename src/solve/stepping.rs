@@ -206,6 +206,7 @@ pub fn run_static(
             if let Some(why) = model.diagnose(comm) {
                 stats.reason = format!("{}; {why}", stats.reason);
             }
+            model.after_failed_attempt();
             pc.invalidate();
             failed = true;
             let reason = stats.reason.clone();

@@ -213,6 +213,7 @@ pub fn run_implicit(
             if let Some(why) = model.diagnose(comm) {
                 stats.reason = format!("{}; {why}", stats.reason);
             }
+            model.after_failed_attempt();
             pc.invalidate();
             let reason = stats.reason.clone();
             pending.push(Attempt {
