@@ -158,4 +158,16 @@ fn quick_study_writes_its_tables_and_charts() {
             "{scene}: {alm_finished} ALM runs finished"
         );
     }
+    // --report rebuilds the tables from study.json alone: the same study.md.
+    let before = std::fs::read_to_string(dir.join("sliding-block/study.md")).unwrap();
+    std::fs::remove_file(dir.join("sliding-block/study.md")).unwrap();
+    let o = Command::new("/usr/bin/python3")
+        .arg(root.join("scripts/study"))
+        .args(["--report", "sliding-block", "--out"])
+        .arg(&dir)
+        .output()
+        .expect("cannot run scripts/study --report");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let after = std::fs::read_to_string(dir.join("sliding-block/study.md")).unwrap();
+    assert_eq!(before, after, "--report gives another study.md");
 }
