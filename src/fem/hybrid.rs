@@ -60,6 +60,9 @@ struct Volumes {
     u1: f64,
     u2: f64,
     k0: f64,
+    /// The pressure's scale s = G / V^{1/3} and the pressure p = s π.
+    s: f64,
+    p: f64,
 }
 
 fn no_split(mat: &dyn Material) -> ElementError {
@@ -73,13 +76,13 @@ pub fn pressure_scale(mat: &dyn Material, reference_volume: f64) -> f64 {
     mat.shear_modulus() / reference_volume.cbrt()
 }
 
-/// The displacement rows `f` (24) and, with `k`, their tangent for the pressure `p`
-/// held fixed.
+/// The displacement rows `f` (24) and, with `k`, their tangent for the pressure
+/// p = s `pi` held fixed (s from the reference volume the kinematics integrate).
 #[allow(clippy::too_many_arguments)]
 fn core(
     x0: &[[f64; 3]; 8],
     u: &[[f64; 3]; 8],
-    p: f64,
+    pi: f64,
     mat: &dyn Material,
     state_old: &[f64],
     state_new: &mut [f64],
@@ -97,6 +100,8 @@ fn core(
     let (pts, gbar) = element_kinematics(&HEX8, true, Kinematics::Finite, x0, u)?;
     let gbar = gbar.expect("F-bar kinematics return the mean gradients");
     let big_v: f64 = pts.iter().map(|q| q.w).sum();
+    let s = pressure_scale(mat, big_v.abs());
+    let p = s * pi;
     let jbar = pts[0].f.determinant();
     let v = jbar * big_v;
     let b: [[f64; 3]; 8] = std::array::from_fn(|a| gbar[a].map(|c| c * v));
@@ -156,6 +161,8 @@ fn core(
         u1,
         u2,
         k0,
+        s,
+        p,
     })
 }
 
@@ -176,9 +183,6 @@ pub fn force(
     k: Option<&mut [f64]>,
 ) -> Result<(), ElementError> {
     assert_eq!(f.len(), DOFS, "force slice length");
-    let big_v = super::element::element_volume(crate::mesh::ElemKind::Hex8, x0);
-    let s = pressure_scale(mat, big_v.abs());
-    let p = s * pi[0];
     match k {
         Some(k) => {
             assert_eq!(k.len(), DOFS * DOFS, "tangent slice length");
@@ -186,7 +190,7 @@ pub fn force(
             let vols = core(
                 x0,
                 u,
-                p,
+                pi[0],
                 mat,
                 state_old,
                 state_new,
@@ -198,6 +202,7 @@ pub fn force(
             for r in 0..24 {
                 k[r * DOFS..r * DOFS + 24].copy_from_slice(&kuu[r * 24..r * 24 + 24]);
             }
+            let s = vols.s;
             let d = -s * s * vols.big_v / vols.k0;
             let up = s * vols.u2 / vols.k0;
             for a in 0..8 {
@@ -227,10 +232,10 @@ pub fn force(
                     }
                 }
             }
-            pressure_rows(&vols, s, p, pi, f);
+            pressure_rows(&vols, pi, f);
         }
         None => {
-            let vols = core(x0, u, p, mat, state_old, state_new, &mut f[..24], None)?;
+            let vols = core(x0, u, pi[0], mat, state_old, state_new, &mut f[..24], None)?;
             if hourglass > 0.0 {
                 super::reduced::add_hourglass(
                     x0,
@@ -241,16 +246,17 @@ pub fn force(
                     None,
                 )?;
             }
-            pressure_rows(&vols, s, p, pi, f);
+            pressure_rows(&vols, pi, f);
         }
     }
     Ok(())
 }
 
 /// r_π = s V (U'(J̄) − p)/K₀ and the inert entries' rows.
-fn pressure_rows(vols: &Volumes, s: f64, p: f64, pi: &[f64; 3], f: &mut [f64]) {
+fn pressure_rows(vols: &Volumes, pi: &[f64; 3], f: &mut [f64]) {
+    let s = vols.s;
     let d = -s * s * vols.big_v / vols.k0;
-    f[24] = s * vols.big_v * (vols.u1 - p) / vols.k0;
+    f[24] = s * vols.big_v * (vols.u1 - vols.p) / vols.k0;
     f[25] = d * pi[1];
     f[26] = d * pi[2];
 }
@@ -266,12 +272,10 @@ pub fn stress(
 ) -> Result<[f64; 6], ElementError> {
     let ns = mat.n_state();
     let mut scratch = vec![0.0; 8 * ns];
-    let big_v = super::element::element_volume(crate::mesh::ElemKind::Hex8, x0);
-    let p = pressure_scale(mat, big_v.abs()) * pi;
     // Σ_a x_a ⊗ f_a = ∫ τ dV for any element force f_a = ∫ τ ∇ₓN_a dV (Σ_a x_a ⊗ ∇ₓN_a
     // = I): the mean stress from the force without a second stress loop.
     let mut f = [0.0; 24];
-    let vols = core(x0, u, p, mat, state_old, &mut scratch, &mut f, None)?;
+    let vols = core(x0, u, pi, mat, state_old, &mut scratch, &mut f, None)?;
     let mut tau = [0.0; 6];
     for a in 0..8 {
         let x = [x0[a][0] + u[a][0], x0[a][1] + u[a][1], x0[a][2] + u[a][2]];
