@@ -12,7 +12,6 @@ use crate::output::h5::H5File;
 use crate::parallel::Comm;
 use crate::partition::partition_elements;
 use crate::{Error, Result};
-use std::io::Write;
 use std::path::Path;
 use std::time::Instant;
 
@@ -276,78 +275,13 @@ pub fn bench_linear(
         }
     }
     if let Some(dir) = export {
-        export_petsc(comm, Path::new(dir), &k, &b)?;
+        crate::linalg::export::write_petsc(comm, Path::new(dir), &k, &b, None)?;
     }
     if !gs.converged {
         return Err(Error::convergence(format!(
             "GMRES did not converge in {} iterations",
             gs.iterations
         )));
-    }
-    Ok(())
-}
-
-/// Gather the matrix and right-hand side on rank 0 and write them in PETSc's binary
-/// format (big-endian; MatLoad / VecLoad read them) as `DIR/A.petsc`, `DIR/b.petsc`.
-fn export_petsc(
-    comm: &dyn Comm,
-    dir: &Path,
-    k: &crate::linalg::matrix::DistMatrix,
-    b: &[f64],
-) -> Result<()> {
-    let (ptr, cols, vals) = k.local_csr();
-    let p = comm.size();
-    let to0 = |n: usize| -> Vec<usize> { (0..p).map(|r| if r == 0 { n } else { 0 }).collect() };
-    let lens: Vec<u64> = ptr.windows(2).map(|w| (w[1] - w[0]) as u64).collect();
-    let gather_u = |v: &[u64]| {
-        let s = to0(v.len());
-        let rc = comm.alltoall_counts(&s);
-        comm.alltoallv_u64(v, &s, &rc)
-    };
-    let gather_f = |v: &[f64]| {
-        let s = to0(v.len());
-        let rc = comm.alltoall_counts(&s);
-        comm.alltoallv_f64(v, &s, &rc)
-    };
-    let all_lens = gather_u(&lens);
-    let all_cols = gather_u(&cols.iter().map(|&c| c as u64).collect::<Vec<_>>());
-    let all_vals = gather_f(&vals);
-    let all_b = gather_f(b);
-    let r = if comm.rank() == 0 {
-        (|| -> Result<()> {
-            std::fs::create_dir_all(dir)?;
-            let m = all_lens.len() as i32;
-            let mut w = std::io::BufWriter::new(std::fs::File::create(dir.join("A.petsc"))?);
-            for v in [1211216i32, m, m, all_cols.len() as i32] {
-                w.write_all(&v.to_be_bytes())?;
-            }
-            for &l in &all_lens {
-                w.write_all(&(l as i32).to_be_bytes())?;
-            }
-            for &c in &all_cols {
-                w.write_all(&(c as i32).to_be_bytes())?;
-            }
-            for &v in &all_vals {
-                w.write_all(&v.to_be_bytes())?;
-            }
-            w.flush()?;
-            let mut w = std::io::BufWriter::new(std::fs::File::create(dir.join("b.petsc"))?);
-            for v in [1211214i32, m] {
-                w.write_all(&v.to_be_bytes())?;
-            }
-            for &v in &all_b {
-                w.write_all(&v.to_be_bytes())?;
-            }
-            w.flush()?;
-            Ok(())
-        })()
-    } else {
-        Ok(())
-    };
-    if !comm.all_ok(r.is_ok()) {
-        return Err(r
-            .err()
-            .unwrap_or_else(|| Error::runtime("PETSc export failed on rank 0")));
     }
     Ok(())
 }

@@ -134,6 +134,11 @@ struct RunArgs {
     /// End the run after this step, as if interrupted (it can go on with --restart).
     #[arg(long, value_name = "STEP", value_parser = clap::value_parser!(u64).range(1..))]
     stop_after: Option<u64>,
+    /// Write the first Newton linear system (matrix with its constraints, right-hand
+    /// side, node coordinates, row ownership) in PETSc's binary format to DIR, for the
+    /// PETSc peers in scripts/ (newton only)
+    #[arg(long, value_name = "DIR")]
+    export_system: Option<PathBuf>,
     #[command(flatten)]
     study: StudyArgs,
 }
@@ -151,6 +156,26 @@ struct StudyArgs {
     /// Set every wall's, entity's and pair's penalty_scale (with --contact penalty).
     #[arg(long, value_name = "S")]
     penalty_scale: Option<f64>,
+    /// The Krylov solves' preconditioner (overrides the deck's `[solver.linear]
+    /// preconditioner`): auto, block-jacobi, asm, two-level, two-level-bj, amg or none.
+    #[arg(long, value_name = "NAME", value_parser = parse_pc)]
+    preconditioner: Option<alfe::linalg::PcKind>,
+    /// Layers of overlap of the Schwarz subdomains (overrides `[solver.linear] overlap`).
+    #[arg(long, value_name = "K")]
+    overlap: Option<usize>,
+}
+
+fn parse_pc(s: &str) -> std::result::Result<alfe::linalg::PcKind, String> {
+    alfe::linalg::PcKind::parse(s).ok_or_else(|| {
+        format!(
+            "expected one of {}",
+            alfe::linalg::PcKind::ALL
+                .iter()
+                .map(|k| k.name())
+                .collect::<Vec<_>>()
+                .join(", ")
+        )
+    })
 }
 
 impl StudyArgs {
@@ -159,6 +184,8 @@ impl StudyArgs {
             refine: self.refine,
             step_scale: self.step_scale,
             penalty_scale: self.penalty_scale,
+            preconditioner: self.preconditioner,
+            overlap: self.overlap,
         }
     }
 }
@@ -287,6 +314,7 @@ fn main_inner(comm: &dyn Comm, raw: Vec<String>) -> Result<()> {
                 restart: a.restart,
                 stop_after: a.stop_after.map(|n| n as usize),
                 overrides: a.study.overrides(),
+                export_system: a.export_system,
             };
             let s = app::run(comm, &opts)?.summary;
             say(&s.headline());

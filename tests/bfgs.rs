@@ -43,6 +43,7 @@ fn solve_with(
         restart: None,
         stop_after: None,
         overrides: alfe::scene::Overrides::default(),
+        export_system: None,
     };
     let Setup { mut model, run, .. } = setup(comm, &ro, &mut Phases::default()).unwrap();
     let mut opts = run.solver.clone();

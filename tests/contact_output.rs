@@ -104,6 +104,7 @@ fn run_in(name: &str, text: &str, contact: Option<ContactMethod>) -> (RunOutcome
         restart: None,
         stop_after: None,
         overrides: alfe::scene::Overrides::default(),
+        export_system: None,
     };
     let o = run(&SerialComm, &opts).unwrap_or_else(|e| panic!("{name}: {e}"));
     (o, out)

@@ -205,6 +205,7 @@ fn a_busy_output_directory_is_refused() {
         restart: None,
         stop_after: None,
         overrides: alfe::scene::Overrides::default(),
+        export_system: None,
     };
     let e = alfe::app::run(&alfe::parallel::SerialComm, &opts)
         .err()

@@ -35,6 +35,7 @@ fn run_with(name: &str, text: &str, solver: SolverKind) -> alfe::app::RunOutcome
         restart: None,
         stop_after: None,
         overrides: alfe::scene::Overrides::default(),
+        export_system: None,
     };
     alfe::app::run(&SerialComm, &opts).unwrap_or_else(|e| panic!("{name}: {e}"))
 }

@@ -49,6 +49,8 @@ pub struct RunOptions {
     pub stop_after: Option<usize>,
     /// A study's changes to the deck (`--refine`, `--step-scale`, `--penalty-scale`).
     pub overrides: crate::scene::Overrides,
+    /// Write the first Newton linear system in PETSc's format here (`--export-system`).
+    pub export_system: Option<PathBuf>,
 }
 
 impl RunOptions {
@@ -66,6 +68,7 @@ impl RunOptions {
             restart: None,
             stop_after: None,
             overrides: crate::scene::Overrides::default(),
+            export_system: None,
         }
     }
 }
@@ -83,6 +86,10 @@ pub struct Summary {
     pub solver: String,
     /// The preconditioner of the linear solves ("auto" resolved; explicit runs have none).
     pub preconditioner: String,
+    /// A two-level preconditioner's coarse space: its size, and what its setups cost
+    /// (the largest over the ranks).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub coarse_space: Option<CoarseSummary>,
     /// `static`, `implicit` or `explicit`.
     pub analysis: String,
     /// The (first) time step: the deck's step, or the explicit step used.
@@ -175,7 +182,58 @@ pub struct Phases {
     pub partition: f64,
     pub assembly: f64,
     pub linear_solve: f64,
+    /// Of `linear_solve`, the preconditioner's setups (factorizations, coarse spaces);
+    /// the rest is GMRES.
+    pub preconditioner_setup: f64,
     pub output: f64,
+}
+
+/// summary.json's `coarse_space`: sizes, and seconds of the last setup by phase and of
+/// all setups, each the largest over the ranks.
+#[derive(Debug, Clone, Default, serde::Serialize)]
+pub struct CoarseSummary {
+    pub dimension: usize,
+    pub kept: usize,
+    pub components: usize,
+    pub setups: usize,
+    pub max_local_functions: usize,
+    pub max_columns: usize,
+    pub extension_s: f64,
+    pub galerkin_s: f64,
+    pub factor_s: f64,
+    pub symbolic_s: f64,
+    pub total_s: f64,
+}
+
+impl CoarseSummary {
+    /// Collective.
+    fn gather(comm: &dyn Comm, c: Option<crate::linalg::CoarseStats>) -> Option<Self> {
+        let c = c.unwrap_or_default();
+        let mut v = [
+            c.local_functions as f64,
+            c.columns as f64,
+            c.extension_seconds,
+            c.galerkin_seconds,
+            c.factor_seconds,
+            c.symbolic_seconds,
+            c.total_seconds,
+            c.dimension as f64,
+        ];
+        comm.allreduce_max(&mut v);
+        (v[7] > 0.0).then(|| Self {
+            dimension: c.dimension,
+            kept: c.kept,
+            components: c.components,
+            setups: c.setups,
+            max_local_functions: v[0] as usize,
+            max_columns: v[1] as usize,
+            extension_s: v[2],
+            galerkin_s: v[3],
+            factor_s: v[4],
+            symbolic_s: v[5],
+            total_s: v[6],
+        })
+    }
 }
 
 #[derive(Debug, Clone, Default, serde::Serialize)]
@@ -384,6 +442,7 @@ pub fn run(comm: &dyn Comm, opts: &RunOptions) -> Result<RunOutcome> {
         .solver
         .preconditioner
         .resolve(comm.size(), model.dofs.dofs.global_len());
+    settings.solver.export_system = opts.export_system.clone();
     let restart = match &opts.restart {
         Some(dir) => Some(load_restart(comm, dir, &mut model, &settings)?),
         None => None,
@@ -715,6 +774,7 @@ fn execute(
     iters.step(last_step + 1, &failed, false);
     phases.assembly = totals.seconds_assembly;
     phases.linear_solve = totals.seconds_linear;
+    phases.preconditioner_setup = totals.seconds_pc_setup;
     phases.output = writer.seconds;
     let mut ph = [
         phases.setup,
@@ -722,8 +782,10 @@ fn execute(
         phases.assembly,
         phases.linear_solve,
         phases.output,
+        phases.preconditioner_setup,
     ];
     let traffic = TrafficSummary::gather(comm);
+    let coarse_space = CoarseSummary::gather(comm, totals.coarse);
     comm.allreduce_max(&mut ph);
     let rss = comm.allgather_f64(peak_rss_mb());
     let message = totals.failure.clone().unwrap_or_else(|| "converged".into());
@@ -760,6 +822,7 @@ fn execute(
             AnalysisKind::Explicit => "none".into(),
             _ => nopts.preconditioner.name().into(),
         },
+        coarse_space,
         analysis: kind.name().into(),
         time_step: explicit_dt
             .as_ref()
@@ -801,6 +864,7 @@ fn execute(
             assembly: ph[2],
             linear_solve: ph[3],
             output: ph[4],
+            preconditioner_setup: ph[5],
         },
         traffic,
         peak_rss_mb: rss.iter().cloned().fold(0.0, f64::max),

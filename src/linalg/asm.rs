@@ -22,6 +22,7 @@
 use super::block_jacobi::{
     FactorOptions, Factorization, FillOrdering, LocalBlockPattern, LocalFactor,
 };
+use super::coarse::{LocalSolver, RingCoupling};
 use super::{DistMatrix, Preconditioner};
 use crate::parallel::{Comm, HaloPlan};
 use crate::Error;
@@ -32,6 +33,8 @@ pub struct RestrictedSchwarz {
     /// Owned and ghost blocks.
     n_own: usize,
     n_ghost: usize,
+    /// The matrix's own ghost blocks (the first layer), for the same-pattern check.
+    n_matrix_ghosts: usize,
     /// The matrix's dof-level halo plan (forward: r on the ghosts).
     halo: HaloPlan,
     /// Owned local rows whose values go to each neighbour (grouped by destination).
@@ -45,6 +48,11 @@ pub struct RestrictedSchwarz {
     /// The factor's value array: the matrix's owned values, then the received rows'.
     vals: Vec<f64>,
     factor: LocalFactor,
+    /// The subdomain's blocks (owned, then ghosts; global), and the received rows'
+    /// couplings to blocks beyond the overlap, entries into `vals`: what a coarse space
+    /// extends with ([`super::coarse::LocalSolver`]).
+    blocks: Vec<usize>,
+    ring: Vec<RingCoupling>,
 }
 
 impl std::ops::Deref for RestrictedSchwarz {
@@ -77,7 +85,7 @@ impl RestrictedSchwarz {
         Self::with_factor_options(comm, mat, opts)
     }
 
-    /// Collective; factored as `opts` says.
+    /// Collective; factored as `opts` says, with `opts.overlap` layers (at least one).
     pub fn with_factor_options(
         comm: &dyn Comm,
         mat: &DistMatrix,
@@ -86,34 +94,19 @@ impl RestrictedSchwarz {
         let layout = mat.layout();
         let (start, end) = (layout.start(), layout.end());
         let n_own = layout.owned_len();
-        let ghosts = mat.ghost_blocks();
+        let ghosts = overlap_blocks(comm, mat, opts.overlap.max(1));
         let n_ghost = ghosts.len();
-        let halo = mat.halo().clone();
-        // The dof-level plan sends the 3 dofs of a block together: its block-level lists.
-        let send_rows: Vec<usize> = halo
-            .send_indices()
-            .chunks_exact(3)
-            .map(|d| d[0] / 3)
-            .collect();
-        let send_row_counts: Vec<usize> = halo.send_counts().iter().map(|c| c / 3).collect();
-        debug_assert_eq!(halo.recv_counts().iter().sum::<usize>(), 3 * n_ghost);
+        // Block-level plan of the ghost rows, and the dof-level plan of their unknowns.
+        let rows_plan = HaloPlan::new(comm, layout, ghosts.clone());
+        let send_rows: Vec<usize> = rows_plan.send_indices().to_vec();
+        let send_row_counts: Vec<usize> = rows_plan.send_counts().to_vec();
+        let dof_ghosts: Vec<usize> = ghosts.iter().flat_map(|&g| 3 * g..3 * g + 3).collect();
+        let halo = HaloPlan::new(comm, &super::matrix::scalar_layout(layout), dof_ghosts);
 
         // The pattern of the rows we send: [row length, global columns...] per row.
         let p = comm.size();
-        let row_len = |i: usize| mat.row_ptr[i + 1] - mat.row_ptr[i];
-        let mut send_pat: Vec<u64> = Vec::new();
-        let mut send_pat_counts = vec![0usize; p];
-        let mut send_val_counts = vec![0usize; p];
-        let mut k = 0;
-        for (dest, &c) in send_row_counts.iter().enumerate() {
-            for &i in &send_rows[k..k + c] {
-                send_pat.push(row_len(i) as u64);
-                send_pat.extend(mat.cols_of_row(i).iter().map(|&g| g as u64));
-                send_pat_counts[dest] += 1 + row_len(i);
-                send_val_counts[dest] += 9 * row_len(i);
-            }
-            k += c;
-        }
+        let (send_pat, send_pat_counts, send_val_counts) =
+            row_patterns(mat, &send_rows, &send_row_counts);
         let recv_pat_counts = comm.alltoall_counts(&send_pat_counts);
         let recv_pat = comm.alltoallv_u64(&send_pat, &send_pat_counts, &recv_pat_counts);
 
@@ -142,7 +135,13 @@ impl RestrictedSchwarz {
             for e in mat.row_ptr[i]..mat.row_ptr[i + 1] {
                 let k = mat.lcol[e] as usize;
                 let diag = e >= mat.diag_begin[i] && e < mat.diag_end[i];
-                pat.cols.push(if diag { k } else { n_own + k });
+                let g = if diag {
+                    start + k
+                } else {
+                    mat.ghost_blocks()[k]
+                };
+                pat.cols
+                    .push(local_of(g).expect("a column of an owned row is local"));
                 pat.entries.push(e);
             }
             pat.row_ptr.push(pat.cols.len());
@@ -150,12 +149,13 @@ impl RestrictedSchwarz {
         // Received rows arrive in ghost order: sorted, so grouped by owner, and each
         // owner sends them in the order they were requested (sorted).
         let mut recv_val_counts = vec![0usize; p];
+        let mut ring = Vec::new();
         let mut pos = 0;
         let mut entry = nnz_blocks;
         let mut src = 0;
         let mut from_src = 0;
-        let recv_rows: Vec<usize> = halo.recv_counts().iter().map(|c| c / 3).collect();
-        for _ in 0..n_ghost {
+        let recv_rows = rows_plan.recv_counts();
+        for q in 0..n_ghost {
             while from_src == recv_rows[src] {
                 src += 1;
                 from_src = 0;
@@ -165,6 +165,12 @@ impl RestrictedSchwarz {
                 if let Some(l) = local_of(g as usize) {
                     pat.cols.push(l);
                     pat.entries.push(entry);
+                } else {
+                    ring.push(RingCoupling {
+                        row: n_own + q,
+                        col: g as usize,
+                        entry,
+                    });
                 }
                 entry += 1;
             }
@@ -180,9 +186,13 @@ impl RestrictedSchwarz {
         vals.extend_from_slice(&mat.vals);
         vals.extend_from_slice(&recv);
         let factor = LocalFactor::new("ASM", &pat, &vals, opts)?;
+        let blocks = (start..end).chain(ghosts.iter().copied()).collect();
         Ok(Self {
+            blocks,
+            ring,
             n_own,
             n_ghost,
+            n_matrix_ghosts: mat.ghost_blocks().len(),
             halo,
             send_rows,
             send_val_counts,
@@ -193,7 +203,7 @@ impl RestrictedSchwarz {
         })
     }
 
-    /// Collective: the values of the rows neighbours hold as ghosts, one `alltoallv`.
+    /// Collective: the values of the rows other ranks hold as ghosts, one `alltoallv`.
     fn exchange(
         comm: &dyn Comm,
         mat: &DistMatrix,
@@ -212,7 +222,7 @@ impl RestrictedSchwarz {
     /// (symbolic reused). A matrix of another pattern is refused on every rank.
     pub fn refactor(&mut self, comm: &dyn Comm, mat: &DistMatrix) -> crate::Result<()> {
         let same = mat.layout().owned_len() == self.n_own
-            && mat.ghost_blocks().len() == self.n_ghost
+            && mat.ghost_blocks().len() == self.n_matrix_ghosts
             && mat.nnz_blocks_local() == self.nnz_blocks;
         if !comm.all_ok(same) {
             return Err(Error::runtime(format!(
@@ -222,7 +232,7 @@ impl RestrictedSchwarz {
                 mat.ghost_blocks().len(),
                 mat.nnz_blocks_local(),
                 self.n_own,
-                self.n_ghost,
+                self.n_matrix_ghosts,
                 self.nnz_blocks
             )));
         }
@@ -245,6 +255,24 @@ impl RestrictedSchwarz {
     }
 }
 
+impl LocalSolver for RestrictedSchwarz {
+    fn local_blocks(&self) -> &[usize] {
+        &self.blocks
+    }
+    fn ring_couplings(&self) -> &[RingCoupling] {
+        &self.ring
+    }
+    fn ring_values<'a>(&'a self, _k: &'a DistMatrix) -> &'a [f64] {
+        &self.vals
+    }
+    fn solve_local(&self, x: &mut [f64]) {
+        self.factor.solve_in_place(x);
+    }
+    fn solve_local_many(&self, x: &mut [f64], ncols: usize) {
+        self.factor.solve_many(x, ncols);
+    }
+}
+
 impl Preconditioner for RestrictedSchwarz {
     fn setup(&mut self, comm: &dyn Comm, k: &DistMatrix) -> crate::Result<()> {
         self.refactor(comm, k)
@@ -257,6 +285,65 @@ impl Preconditioner for RestrictedSchwarz {
         self.factor.solve_in_place(&mut w);
         z.copy_from_slice(&w[..n]);
     }
+}
+
+/// `[row length, global block columns...]` of each owned block row in `rows` (grouped by
+/// destination, `counts` rows each), the u64 count per destination, and the values per
+/// destination (9 per block).
+fn row_patterns(
+    mat: &DistMatrix,
+    rows: &[usize],
+    counts: &[usize],
+) -> (Vec<u64>, Vec<usize>, Vec<usize>) {
+    let mut pat: Vec<u64> = Vec::new();
+    let mut pat_counts = vec![0usize; counts.len()];
+    let mut val_counts = vec![0usize; counts.len()];
+    let mut k = 0;
+    for (dest, &c) in counts.iter().enumerate() {
+        for &i in &rows[k..k + c] {
+            let cols = mat.cols_of_row(i);
+            pat.push(cols.len() as u64);
+            pat.extend(cols.iter().map(|&g| g as u64));
+            pat_counts[dest] += 1 + cols.len();
+            val_counts[dest] += 9 * cols.len();
+        }
+        k += c;
+    }
+    (pat, pat_counts, val_counts)
+}
+
+/// Collective: the ghost blocks of `layers` layers of overlap around the owned rows in
+/// `mat`'s graph (sorted): the first layer is the owned rows' ghost columns, each next
+/// one the columns of the last layer's rows (fetched from their owners) not yet held.
+fn overlap_blocks(comm: &dyn Comm, mat: &DistMatrix, layers: usize) -> Vec<usize> {
+    let layout = mat.layout();
+    let mut ghosts: Vec<usize> = mat.ghost_blocks().to_vec();
+    let mut frontier = ghosts.clone();
+    for _ in 1..layers {
+        // Every rank takes part in every layer's exchange, with or without a frontier.
+        let plan = HaloPlan::new(comm, layout, frontier);
+        let (pat, pc, _) = row_patterns(mat, plan.send_indices(), plan.send_counts());
+        let rc = comm.alltoall_counts(&pc);
+        let recv = comm.alltoallv_u64(&pat, &pc, &rc);
+        let mut next: Vec<usize> = Vec::new();
+        let mut i = 0;
+        while i < recv.len() {
+            let len = recv[i] as usize;
+            next.extend(
+                recv[i + 1..i + 1 + len]
+                    .iter()
+                    .map(|&g| g as usize)
+                    .filter(|&g| !layout.owns(g) && ghosts.binary_search(&g).is_err()),
+            );
+            i += 1 + len;
+        }
+        next.sort_unstable();
+        next.dedup();
+        ghosts.extend_from_slice(&next);
+        ghosts.sort_unstable();
+        frontier = next;
+    }
+    ghosts
 }
 
 #[cfg(test)]
@@ -364,10 +451,12 @@ mod tests {
     /// are right, for SPD (Cholesky) and non-symmetric (LU) matrices.
     #[test]
     fn applies_the_restricted_inverse_of_the_principal_submatrix() {
-        for p in [2usize, 3] {
+        for (p, overlap) in [(2usize, 1usize), (3, 1), (2, 2), (4, 3)] {
             for non_symmetric in [false, true] {
                 run_ranks(p, |c| {
-                    let mut m = elasticity_cube(c, 3, &split(64, p));
+                    let ne = if overlap > 1 { 5 } else { 3 };
+                    let nb = (ne + 1) * (ne + 1) * (ne + 1);
+                    let mut m = elasticity_cube(c, ne, &split(nb, p));
                     if non_symmetric {
                         make_non_symmetric(c, &mut m);
                     }
@@ -375,8 +464,29 @@ mod tests {
                     let a = dense(c, &m);
                     let r_glob = global_rhs(ng);
                     let (s0, s1) = (m.layout().start(), m.layout().end());
-                    let blocks: Vec<usize> =
-                        (s0..s1).chain(m.ghost_blocks().iter().copied()).collect();
+                    // S: the owned blocks and `overlap` layers of block neighbours in the
+                    // dense matrix's graph.
+                    let nbk = ng / 3;
+                    // The hex8 pattern: nodes of a common element.
+                    let nn = ne + 1;
+                    let ijk = |b: usize| [b % nn, (b / nn) % nn, b / (nn * nn)];
+                    let linked = |i: usize, j: usize| {
+                        let (p, q) = (ijk(i), ijk(j));
+                        (0..3).all(|d| p[d].abs_diff(q[d]) <= 1)
+                    };
+                    let mut inside: Vec<bool> = (0..nbk).map(|b| b >= s0 && b < s1).collect();
+                    for _ in 0..overlap {
+                        let before = inside.clone();
+                        for j in 0..nbk {
+                            if !before[j] && (0..nbk).any(|i| before[i] && linked(i, j)) {
+                                inside[j] = true;
+                            }
+                        }
+                    }
+                    let ghosts: Vec<usize> = (0..nbk)
+                        .filter(|&b| inside[b] && !(b >= s0 && b < s1))
+                        .collect();
+                    let blocks: Vec<usize> = (s0..s1).chain(ghosts.iter().copied()).collect();
                     let dofs: Vec<usize> = blocks
                         .iter()
                         .flat_map(|&b| [3 * b, 3 * b + 1, 3 * b + 2])
@@ -390,8 +500,13 @@ mod tests {
                     let w = dense_solve(a_s, dofs.iter().map(|&i| r_glob[i]).collect());
                     assert_eq!(ns, w.len());
 
-                    let ras = RestrictedSchwarz::new(c, &m).unwrap();
-                    assert!(ras.n_ghost_blocks() > 0);
+                    let opts = FactorOptions {
+                        overlap,
+                        ..FactorOptions::default()
+                    };
+                    let ras = RestrictedSchwarz::with_factor_options(c, &m, opts).unwrap();
+                    assert_eq!(ras.n_ghost_blocks(), ghosts.len());
+                    assert_eq!(&ras.local_blocks()[s1 - s0..], &ghosts[..]);
                     let r = &r_glob[3 * s0..3 * s1];
                     let mut z = vec![0.0; r.len()];
                     ras.apply(c, r, &mut z);
@@ -401,7 +516,22 @@ mod tests {
                         .zip(&w)
                         .map(|(a, b)| (a - b).abs())
                         .fold(0.0, f64::max);
-                    assert!(err < 1e-10 * scale, "p {p}: {err:e} vs {scale:e}");
+                    assert!(
+                        err < 1e-10 * scale,
+                        "p {p} overlap {overlap}: {err:e} vs {scale:e}"
+                    );
+                    // The ring: the couplings of subdomain rows to blocks outside S.
+                    let ring: std::collections::BTreeSet<(usize, usize)> = ras
+                        .ring_couplings()
+                        .iter()
+                        .map(|rc| (rc.row, rc.col))
+                        .collect();
+                    assert!(ring.iter().all(|&(_, j)| !inside[j]));
+                    for (l, &bl) in blocks.iter().enumerate() {
+                        for j in (0..nbk).filter(|&j| !inside[j] && linked(bl, j)) {
+                            assert!(ring.contains(&(l, j)), "({l}, {j}) not in the ring");
+                        }
+                    }
                 });
             }
         }
@@ -409,26 +539,32 @@ mod tests {
 
     #[test]
     fn refactor_reuses_the_symbolic_factorization() {
-        run_ranks(2, |c| {
-            let mut m = elasticity_cube(c, 4, &split(125, 2));
-            let mut ras = RestrictedSchwarz::new(c, &m).unwrap();
-            for v in m.vals.iter_mut() {
-                *v *= 2.0;
-            }
-            ras.refactor(c, &m).unwrap();
-            let fresh = RestrictedSchwarz::new(c, &m).unwrap();
-            let n = m.n_owned_dofs();
-            let r: Vec<f64> = (0..n).map(|i| (i as f64).sin()).collect();
-            let (mut z1, mut z2) = (vec![0.0; n], vec![0.0; n]);
-            ras.apply(c, &r, &mut z1);
-            fresh.apply(c, &r, &mut z2);
-            assert!(z1.iter().zip(&z2).all(|(a, b)| (a - b).abs() < 1e-12));
-            assert_eq!(ras.factorizations(), 2);
-            assert_eq!(ras.symbolic_factorizations(), 1);
-            // Another pattern is refused on every rank.
-            let other = elasticity_cube(c, 3, &split(64, 2));
-            assert!(ras.refactor(c, &other).is_err());
-        });
+        for overlap in [1, 2] {
+            run_ranks(2, |c| {
+                let opts = FactorOptions {
+                    overlap,
+                    ..FactorOptions::default()
+                };
+                let mut m = elasticity_cube(c, 4, &split(125, 2));
+                let mut ras = RestrictedSchwarz::with_factor_options(c, &m, opts).unwrap();
+                for v in m.vals.iter_mut() {
+                    *v *= 2.0;
+                }
+                ras.refactor(c, &m).unwrap();
+                let fresh = RestrictedSchwarz::with_factor_options(c, &m, opts).unwrap();
+                let n = m.n_owned_dofs();
+                let r: Vec<f64> = (0..n).map(|i| (i as f64).sin()).collect();
+                let (mut z1, mut z2) = (vec![0.0; n], vec![0.0; n]);
+                ras.apply(c, &r, &mut z1);
+                fresh.apply(c, &r, &mut z2);
+                assert!(z1.iter().zip(&z2).all(|(a, b)| (a - b).abs() < 1e-12));
+                assert_eq!(ras.factorizations(), 2);
+                assert_eq!(ras.symbolic_factorizations(), 1);
+                // Another pattern is refused on every rank.
+                let other = elasticity_cube(c, 3, &split(64, 2));
+                assert!(ras.refactor(c, &other).is_err());
+            });
+        }
     }
 
     /// GMRES with RAS reaches the block-Jacobi solution in fewer iterations on 2 and 3

@@ -34,6 +34,7 @@
 //! Factorization is local: callers agree on failure across ranks with `Comm::all_ok`.
 
 use super::border::Border;
+use super::coarse::{LocalSolver, RingCoupling};
 use super::condense::Condensation;
 use super::nd_lu::NdLu;
 use super::ordering::{self, Graph};
@@ -84,6 +85,9 @@ pub struct FactorOptions {
     pub factorization: Factorization,
     pub ordering: FillOrdering,
     pub condense: bool,
+    /// Layers of overlap of a restricted additive Schwarz subdomain (block Jacobi has
+    /// none).
+    pub overlap: usize,
 }
 
 impl Default for FactorOptions {
@@ -92,6 +96,7 @@ impl Default for FactorOptions {
             factorization: Factorization::Auto,
             ordering: FillOrdering::NestedDissection,
             condense: true,
+            overlap: 1,
         }
     }
 }
@@ -194,6 +199,10 @@ impl std::fmt::Debug for LocalFactor {
 #[derive(Debug)]
 pub struct BlockJacobi {
     f: LocalFactor,
+    /// The owned blocks (global), and the owned rows' couplings to ghost blocks: what
+    /// a coarse space extends with ([`super::coarse::LocalSolver`]).
+    blocks: Vec<usize>,
+    ring: Vec<RingCoupling>,
 }
 
 impl std::ops::Deref for BlockJacobi {
@@ -235,7 +244,24 @@ impl BlockJacobi {
     pub fn with_factor_options(mat: &DistMatrix, opts: FactorOptions) -> crate::Result<Self> {
         let pat = diagonal_pattern(mat);
         let f = LocalFactor::new("block Jacobi", &pat, &mat.vals, opts)?;
-        Ok(Self { f })
+        let layout = mat.layout();
+        let ghosts = mat.ghost_blocks();
+        let mut ring = Vec::new();
+        for i in 0..layout.owned_len() {
+            for e in (mat.row_ptr[i]..mat.diag_begin[i]).chain(mat.diag_end[i]..mat.row_ptr[i + 1])
+            {
+                ring.push(RingCoupling {
+                    row: i,
+                    col: ghosts[mat.lcol[e] as usize],
+                    entry: e,
+                });
+            }
+        }
+        Ok(Self {
+            f,
+            blocks: (layout.start()..layout.end()).collect(),
+            ring,
+        })
     }
 
     /// Numeric refactorization for new values of the same pattern (symbolic reused).
@@ -621,28 +647,68 @@ impl LocalFactor {
 
     /// x ← M⁻¹ x for the factored (condensed) matrix M (length [`Self::n`]).
     fn solve_factored(&self, z: &mut [f64]) {
-        let col = faer::ColMut::from_slice_mut(z);
+        self.solve_factored_many(z, 1);
+    }
+
+    /// X ← M⁻¹ X for `ncols` columns of length [`Self::n`], one after the other.
+    fn solve_factored_many(&self, z: &mut [f64], ncols: usize) {
+        if ncols == 0 || self.n == 0 {
+            return;
+        }
         match &self.factor {
             Factor::None => {}
-            Factor::Lu(lu) => lu.solve_in_place(col),
+            Factor::Lu(lu) => {
+                lu.solve_in_place(faer::MatMut::from_column_major_slice_mut(z, self.n, ncols))
+            }
             Factor::NdLu => self
                 .nd_lu
                 .as_ref()
                 .expect("ND LU present")
-                .solve_in_place(z),
+                .solve_many(z, ncols),
             Factor::Llt => {
                 let sym = self
                     .symbolic_llt
                     .as_ref()
                     .expect("symbolic Cholesky present");
                 let par = faer::get_global_parallelism();
-                let mut mem = MemBuffer::new(sym.solve_in_place_scratch::<f64>(1, par));
+                let mut mem = MemBuffer::new(sym.solve_in_place_scratch::<f64>(ncols, par));
                 LltRef::new(sym, &self.llt_values).solve_in_place_with_conj(
                     Conj::No,
-                    col.as_mat_mut(),
+                    faer::MatMut::from_column_major_slice_mut(z, self.n, ncols),
                     par,
                     MemStack::new(&mut mem),
                 );
+            }
+        }
+    }
+
+    /// X ← A⁻¹ X for `ncols` columns of length [`Self::n_full`], one after the other:
+    /// one pass through the factor for all of them (the supernodal solves work on
+    /// blocks of columns).
+    pub fn solve_many(&self, z: &mut [f64], ncols: usize) {
+        let nf = self.n_full;
+        if ncols == 0 || nf == 0 {
+            return;
+        }
+        if self.border.is_some() || (matches!(self.factor, Factor::None) && self.n > 0) {
+            for col in z.chunks_exact_mut(nf) {
+                self.solve_in_place(col);
+            }
+            return;
+        }
+        match self.cond.as_deref() {
+            None => self.solve_factored_many(z, ncols),
+            Some(c) => {
+                let mut x = Vec::with_capacity(self.n_mid * ncols);
+                let mut one = Vec::with_capacity(self.n_mid);
+                for col in z.chunks_exact(nf) {
+                    c.rhs(col, &mut one);
+                    x.extend_from_slice(&one);
+                }
+                self.solve_factored_many(&mut x, ncols);
+                for (col, xc) in z.chunks_exact_mut(nf).zip(x.chunks_exact(self.n_mid)) {
+                    c.recover(xc, col);
+                }
             }
         }
     }
@@ -734,6 +800,24 @@ impl LocalFactor {
     /// solve; on the first call also the symbolic factorization).
     pub fn last_factor_seconds(&self) -> f64 {
         self.last_factor_seconds
+    }
+}
+
+impl LocalSolver for BlockJacobi {
+    fn local_blocks(&self) -> &[usize] {
+        &self.blocks
+    }
+    fn ring_couplings(&self) -> &[RingCoupling] {
+        &self.ring
+    }
+    fn ring_values<'a>(&'a self, k: &'a DistMatrix) -> &'a [f64] {
+        &k.vals
+    }
+    fn solve_local(&self, x: &mut [f64]) {
+        self.f.solve_in_place(x);
+    }
+    fn solve_local_many(&self, x: &mut [f64], ncols: usize) {
+        self.f.solve_many(x, ncols);
     }
 }
 

@@ -48,9 +48,52 @@ pub struct DistMatrix {
     /// block, coupled to its 8 nodes): a factorization may eliminate them element by
     /// element ([`super::condense`]).
     element_rows: std::ops::Range<usize>,
+    /// Owned block rows that are displacement nodes: the first `node_blocks` (all of
+    /// them unless told otherwise, [`DistMatrix::set_block_kinds`]).
+    node_blocks: Option<usize>,
+    /// Global blocks of the problem's global unknowns (a rigid body's DOFs, a coupling's
+    /// reference point: dense rows), sorted; the same on every rank.
+    global_blocks: Vec<usize>,
+    /// The body (part) of each owned node block, if told.
+    node_bodies: Vec<u32>,
 }
 
 impl DistMatrix {
+    /// Say which blocks are what, for preconditioners that build on the geometry (the
+    /// coarse space, [`super::coarse`]): the first `node_blocks` owned block rows are
+    /// displacement nodes, and `global_blocks` (global block indices, the same on every
+    /// rank) are global unknowns coupled to many nodes; `node_bodies` (one per node block,
+    /// or empty) says which body each node belongs to.
+    pub fn set_block_kinds(
+        &mut self,
+        node_blocks: usize,
+        mut global_blocks: Vec<usize>,
+        node_bodies: Vec<u32>,
+    ) {
+        assert!(node_blocks <= self.layout.owned_len());
+        assert!(node_bodies.is_empty() || node_bodies.len() == node_blocks);
+        global_blocks.sort_unstable();
+        global_blocks.dedup();
+        self.node_blocks = Some(node_blocks);
+        self.global_blocks = global_blocks;
+        self.node_bodies = node_bodies;
+    }
+
+    /// The body of owned node block `i` (0 if not told).
+    pub fn node_body(&self, i: usize) -> u32 {
+        self.node_bodies.get(i).copied().unwrap_or(0)
+    }
+
+    /// Owned block rows that are displacement nodes (the first ones).
+    pub fn node_blocks(&self) -> usize {
+        self.node_blocks.unwrap_or(self.layout.owned_len())
+    }
+
+    /// Global blocks of global unknowns (sorted).
+    pub fn global_blocks(&self) -> &[usize] {
+        &self.global_blocks
+    }
+
     /// Mark owned local block rows `rows` as element blocks (see the field).
     pub fn set_element_rows(&mut self, rows: std::ops::Range<usize>) {
         self.element_rows = rows;
@@ -59,6 +102,11 @@ impl DistMatrix {
     /// Whether owned local block row `i` is an element block.
     pub fn is_element_row(&self, i: usize) -> bool {
         self.element_rows.contains(&i)
+    }
+
+    /// The owned local block rows marked as element blocks.
+    pub fn element_rows(&self) -> std::ops::Range<usize> {
+        self.element_rows.clone()
     }
 
     /// Collective. `pairs` are the (global block row, global block col) couplings this
@@ -188,6 +236,9 @@ impl DistMatrix {
             recv_counts,
             recv_pos,
             element_rows: 0..0,
+            node_blocks: None,
+            global_blocks: Vec::new(),
+            node_bodies: Vec::new(),
         }
     }
 

@@ -12,12 +12,15 @@ pub mod amg;
 pub mod asm;
 pub mod block_jacobi;
 pub mod border;
+pub mod coarse;
 pub mod condense;
+pub mod export;
 pub mod gmres;
 mod hypre;
 pub mod matrix;
 mod nd_lu;
 pub mod ordering;
+pub mod two_level;
 
 pub use amg::{BoomerAmg, NodePoints};
 
@@ -25,7 +28,9 @@ pub use asm::RestrictedSchwarz;
 pub use block_jacobi::{
     BlockJacobi, FactorOptions, Factorization, FillOrdering, LocalBlockPattern, LocalFactor,
 };
+pub use coarse::{CoarseMode, CoarseStats};
 pub use gmres::{gmres, GmresOptions, GmresStats};
+pub use two_level::TwoLevel;
 
 pub use matrix::DistMatrix;
 
@@ -74,29 +79,38 @@ pub trait Preconditioner {
     fn is_factored(&self) -> bool {
         true
     }
+    /// A two-level preconditioner's coarse space: its sizes and setup times.
+    fn coarse_stats(&self) -> Option<CoarseStats> {
+        None
+    }
 }
 
 /// Which preconditioner the Krylov solves use (deck `[solver.linear] preconditioner`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum PcKind {
-    /// Chosen by size ([`PcKind::resolve`]): block Jacobi for small systems on one rank,
-    /// AMG otherwise. The deck's default; the scene turns it into
-    /// [`PcKind::AutoFactored`] for problem classes AMG does not suit (nearly
+    /// Chosen by size and rank count ([`PcKind::resolve`]): on one rank block Jacobi (the
+    /// direct solve) for small systems, AMG for large ones; on more, AMG for large
+    /// systems, two-level Schwarz for small ones. The deck's default; the scene turns it
+    /// into [`PcKind::AutoFactored`] for problem classes AMG does not suit (nearly
     /// incompressible or plastic solids, friction, coupling constraints).
     #[default]
     Auto,
     /// Chosen by rank count among the factored ones: block Jacobi on one rank (the direct
-    /// solve), ASM on more (deck "auto-factored"). 2 ranks, block Jacobi → ASM, GMRES
-    /// iterations and wall time: cylinder-press 44857 → 5600, 8.2 → 2.4 s; plastic-bar
-    /// 7363 → 1708, 1.6 → 0.9 s; rubber-indent did not finish in 10 min → 84 s; never
-    /// slower on the other scenes of this class (issue 11's note).
+    /// solve), two-level Schwarz on more (deck "auto-factored"; README "Linear solves"
+    /// has the measurements: one-level ASM's GMRES iterations grow with the ranks, the
+    /// two-level method's do not).
     AutoFactored,
     /// Block Jacobi ([`BlockJacobi`]): each rank's diagonal block factored exactly.
     BlockJacobi,
     /// Restricted additive Schwarz with one layer of overlap (the ghost nodes,
     /// [`RestrictedSchwarz`]).
     Asm,
+    /// Two-level Schwarz ([`TwoLevel`]): RAS with a coarse space of interface
+    /// rigid-body modes extended by RAS's own factor ([`coarse`]).
+    TwoLevel,
+    /// Two-level with block Jacobi as its first level.
+    TwoLevelBj,
     /// Algebraic multigrid ([`BoomerAmg`], hypre): one V-cycle on the condensed
     /// displacement matrix (systems AMG; the rigid-body rotations on request).
     Amg,
@@ -128,28 +142,38 @@ impl PcKind {
                 };
                 if unknowns >= min {
                     Self::Amg
+                } else if ranks > 1 {
+                    Self::TwoLevel
                 } else {
                     Self::BlockJacobi
                 }
             }
-            Self::AutoFactored if ranks > 1 => Self::Asm,
+            Self::AutoFactored if ranks > 1 => Self::TwoLevel,
             Self::AutoFactored => Self::BlockJacobi,
             k => k,
         }
     }
 
+    /// Whether it builds on the node coordinates (the coarse space's rigid-body modes).
+    pub fn wants_points(self) -> bool {
+        matches!(self, Self::TwoLevel | Self::TwoLevelBj)
+    }
+
+    /// Every kind, in the order the deck's documentation lists them.
+    pub const ALL: [Self; 8] = [
+        Self::Auto,
+        Self::AutoFactored,
+        Self::BlockJacobi,
+        Self::Asm,
+        Self::TwoLevel,
+        Self::TwoLevelBj,
+        Self::Amg,
+        Self::None,
+    ];
+
     /// The kind named `s` (its [`PcKind::name`], as in the deck), if any.
     pub fn parse(s: &str) -> Option<Self> {
-        [
-            Self::Auto,
-            Self::AutoFactored,
-            Self::BlockJacobi,
-            Self::Asm,
-            Self::Amg,
-            Self::None,
-        ]
-        .into_iter()
-        .find(|k| k.name() == s)
+        Self::ALL.into_iter().find(|k| k.name() == s)
     }
 
     pub fn name(self) -> &'static str {
@@ -158,6 +182,8 @@ impl PcKind {
             PcKind::AutoFactored => "auto-factored",
             PcKind::BlockJacobi => "block-jacobi",
             PcKind::Asm => "asm",
+            PcKind::TwoLevel => "two-level",
+            PcKind::TwoLevelBj => "two-level-bj",
             PcKind::Amg => "amg",
             PcKind::None => "none",
         }
@@ -181,6 +207,18 @@ pub fn preconditioner(
             Box::new(OnFirstSetup::<BlockJacobi>(None, opts))
         }
         PcKind::Asm => Box::new(OnFirstSetup::<RestrictedSchwarz>(None, opts)),
+        PcKind::TwoLevel => Box::new(two_level::TwoLevelOnFirstSetup::<RestrictedSchwarz> {
+            built: None,
+            opts,
+            points,
+            mode: CoarseMode::Multiplicative,
+        }),
+        PcKind::TwoLevelBj => Box::new(two_level::TwoLevelOnFirstSetup::<BlockJacobi> {
+            built: None,
+            opts,
+            points,
+            mode: CoarseMode::Multiplicative,
+        }),
         PcKind::Amg => Box::new(BoomerAmg::new(points)),
         PcKind::None => Box::new(Identity),
     }
@@ -250,18 +288,26 @@ mod tests {
         assert_eq!(r(1, 27_975), PcKind::BlockJacobi);
         assert_eq!(r(1, AUTO_AMG_MIN_UNKNOWNS_ONE_RANK), PcKind::Amg);
         assert_eq!(r(2, 27_975), PcKind::Amg);
-        assert_eq!(r(16, AUTO_AMG_MIN_UNKNOWNS - 1), PcKind::BlockJacobi);
-        for k in [PcKind::BlockJacobi, PcKind::Asm, PcKind::Amg, PcKind::None] {
+        assert_eq!(r(16, AUTO_AMG_MIN_UNKNOWNS - 1), PcKind::TwoLevel);
+        assert_eq!(r(1, AUTO_AMG_MIN_UNKNOWNS - 1), PcKind::BlockJacobi);
+        for k in [
+            PcKind::BlockJacobi,
+            PcKind::Asm,
+            PcKind::TwoLevel,
+            PcKind::TwoLevelBj,
+            PcKind::Amg,
+            PcKind::None,
+        ] {
             assert_eq!(k.resolve(4, 1 << 20), k);
             assert_eq!(PcKind::parse(k.name()), Some(k));
         }
         assert_eq!(PcKind::parse("auto"), Some(PcKind::Auto));
-        // Where AMG does not suit: the direct solve on one rank, ASM on more, any size.
+        // Where AMG does not suit: the direct solve on one rank, two-level on more.
         assert_eq!(
             PcKind::AutoFactored.resolve(1, 1 << 20),
             PcKind::BlockJacobi
         );
-        assert_eq!(PcKind::AutoFactored.resolve(2, 100), PcKind::Asm);
+        assert_eq!(PcKind::AutoFactored.resolve(2, 100), PcKind::TwoLevel);
         assert_eq!(PcKind::parse("auto-factored"), Some(PcKind::AutoFactored));
     }
 }

@@ -145,19 +145,23 @@ impl NdLu {
         &self.col_fwd
     }
 
-    /// x ← A⁻¹ x; no-op before a successful factorization.
-    pub fn solve_in_place(&self, x: &mut [f64]) {
-        if !self.factored {
+    /// X ← A⁻¹ X for `ncols` columns stored one after the other in `x`.
+    pub fn solve_many(&self, x: &mut [f64], ncols: usize) {
+        if !self.factored || ncols == 0 {
             return;
         }
         let rows = PermRef::new_checked(&self.row_fwd, &self.row_inv, self.n);
         let cols = PermRef::new_checked(&self.col_fwd, &self.col_inv, self.n);
-        let mut mem = MemBuffer::new(solve_in_place_scratch::<usize, f64>(self.n, 1, Par::Seq));
+        let mut mem = MemBuffer::new(solve_in_place_scratch::<usize, f64>(
+            self.n,
+            ncols,
+            Par::Seq,
+        ));
         self.lu.solve_in_place_with_conj(
             rows,
             cols,
             Conj::No,
-            faer::ColMut::from_slice_mut(x).as_mat_mut(),
+            faer::MatMut::from_column_major_slice_mut(x, self.n, ncols),
             Par::Seq,
             MemStack::new(&mut mem),
         );
@@ -277,7 +281,7 @@ mod tests {
                     .solve(&nalgebra::DVector::from_vec(b.clone()));
                 let want = want.expect("dense matrix nonsingular");
                 let mut x = b;
-                lu.solve_in_place(&mut x);
+                lu.solve_many(&mut x, 1);
                 let err = x
                     .iter()
                     .zip(want.iter())

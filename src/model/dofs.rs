@@ -245,6 +245,17 @@ impl DofMap {
     pub fn placed(&self, c: usize) -> Placed {
         self.placed[c]
     }
+    /// The global blocks of every contribution's global unknowns (sorted; the same on
+    /// every rank).
+    pub fn global_blocks(&self) -> Vec<usize> {
+        let mut g: Vec<usize> = self
+            .placed
+            .iter()
+            .flat_map(|p| p.global_first..p.global_first + p.global)
+            .collect();
+        g.sort_unstable();
+        g
+    }
     /// Neighbour ranks of the ghost exchange (diagnostics).
     pub fn halo(&self) -> &HaloPlan {
         &self.halo

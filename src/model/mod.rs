@@ -432,7 +432,31 @@ impl Model {
         let p = self.dofs.placed(0);
         let first = p.owned_local - self.dofs.n_local_nodes() + self.dofs.n_owned_nodes();
         k.set_element_rows(first..first + p.owned);
+        k.set_block_kinds(
+            self.dofs.n_owned_nodes(),
+            self.dofs.global_blocks(),
+            self.node_bodies(),
+        );
         k
+    }
+
+    /// The part of each owned node (the lowest of the parts of the local elements that
+    /// touch it; every owned node is touched by one here): which body a node belongs to,
+    /// for the coarse space's components ([`crate::linalg::coarse`]): parts that touch
+    /// only through contact move apart rigidly, and their rigid modes are separate.
+    pub fn node_bodies(&self) -> Vec<u32> {
+        let n = self.mesh.n_owned();
+        let mut body = vec![u32::MAX; n];
+        let els = &self.solids.elements;
+        for e in 0..els.len() {
+            let part = els.part.get(e).copied().unwrap_or(0);
+            for &a in els.nodes(e) {
+                if a < n {
+                    body[a] = body[a].min(part);
+                }
+            }
+        }
+        body
     }
 
     /// Assemble the (unconstrained) Jacobian ∂r/∂u at u (collective).

@@ -510,6 +510,12 @@ pub fn build(deck: &Deck, deck_dir: &Path) -> Result<Scene> {
             format!("expected 0 < fd_delta < 1, got {}", s.fd_delta),
         ));
     }
+    if !(1..=8).contains(&s.linear.overlap) {
+        return Err(err(
+            "solver.linear.overlap",
+            format!("expected 1 to 8 layers, got {}", s.linear.overlap),
+        ));
+    }
     if s.linear.restart == 0 || s.linear.max_iterations == 0 {
         return Err(err(
             "solver.linear",
@@ -868,12 +874,14 @@ fn run_settings(deck: &Deck, timeline: &super::steps::Timeline) -> RunSettings {
             },
             pc_lag: s.linear.lag,
             condense: s.linear.condense,
+            pc_overlap: s.linear.overlap,
             rigid_body_modes: s.linear.rigid_body_modes,
             bfgs_reform: s.bfgs_reform,
             fd_delta: s.fd_delta,
             fd_rule: s.fd_step,
             char_length: 0.0,
             line_search: s.line_search.unwrap_or(false),
+            export_system: None,
         },
         output: OutputSettings {
             every: deck.output.every,

@@ -682,6 +682,10 @@ pub struct LinearDeck {
     /// solves").
     #[serde(default)]
     pub rigid_body_modes: bool,
+    /// Layers of overlap of the ASM subdomains (`asm`, `two-level`): 1 (default) takes
+    /// the ghost nodes, each more layer their neighbours.
+    #[serde(default = "one")]
+    pub overlap: usize,
 }
 
 fn d_lrtol() -> f64 {
@@ -704,6 +708,7 @@ impl Default for LinearDeck {
             lag: 0,
             condense: true,
             rigid_body_modes: false,
+            overlap: 1,
         }
     }
 }

@@ -17,6 +17,10 @@ pub struct Overrides {
     pub step_scale: f64,
     /// The penalty stiffness of every wall, entity and pair (`penalty_scale`), where set.
     pub penalty_scale: Option<f64>,
+    /// `[solver.linear] preconditioner` and `overlap`, where set (`--preconditioner`,
+    /// `--overlap`): the scaling study runs one deck with each.
+    pub preconditioner: Option<crate::linalg::PcKind>,
+    pub overlap: Option<usize>,
 }
 
 impl Default for Overrides {
@@ -25,6 +29,8 @@ impl Default for Overrides {
             refine: 1,
             step_scale: 1.0,
             penalty_scale: None,
+            preconditioner: None,
+            overlap: None,
         }
     }
 }
@@ -107,6 +113,12 @@ impl Overrides {
                 s.min_step = s.min_step.map(|x| x * f);
                 s.max_step = s.max_step.map(|x| x * f);
             }
+        }
+        if let Some(pc) = self.preconditioner {
+            deck.solver.linear.preconditioner = pc;
+        }
+        if let Some(o) = self.overlap {
+            deck.solver.linear.overlap = o;
         }
         if let Some(p) = self.penalty_scale {
             for w in deck.walls.iter_mut().chain(deck.entities.iter_mut()) {

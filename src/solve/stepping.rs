@@ -77,6 +77,10 @@ pub struct RunTotals {
     pub retries: usize,
     pub seconds_assembly: f64,
     pub seconds_linear: f64,
+    /// Of `seconds_linear`, the preconditioner's setups.
+    pub seconds_pc_setup: f64,
+    /// The two-level preconditioner's coarse space after the last setup.
+    pub coarse: Option<crate::linalg::CoarseStats>,
     /// Why the run stopped early, if it did.
     pub failure: Option<String>,
     /// The failed attempts at the step that stopped the run.
@@ -121,6 +125,10 @@ impl RunTotals {
         self.factorizations += s.factorizations;
         self.seconds_assembly += s.seconds_assembly;
         self.seconds_linear += s.seconds_linear;
+        self.seconds_pc_setup += s.seconds_pc_setup;
+        if s.coarse.is_some() {
+            self.coarse = s.coarse;
+        }
     }
 }
 
@@ -167,9 +175,9 @@ pub fn run_static(
     u.resize(n, 0.0);
     let mut r = vec![0.0; n];
     let mut k = model.new_matrix(comm);
-    let mut pc = Preconditioning::new(opts.preconditioner, opts.pc_lag, opts.condense);
-    if opts.rigid_body_modes {
-        pc = pc.with_points(model.node_points());
+    let mut pc = Preconditioning::new(opts.preconditioner, opts.pc_lag, opts.factor_options());
+    if opts.rigid_body_modes || opts.preconditioner.wants_points() || opts.export_system.is_some() {
+        pc = pc.with_points(model.node_points(), opts.rigid_body_modes);
     }
     let mut tot = RunTotals::default();
     let mut t0 = Instant::now();

@@ -44,6 +44,7 @@ pub fn try_run_deck(name: &str, text: &str) -> alfe::Result<RunOutcome> {
         restart: None,
         stop_after: None,
         overrides: alfe::scene::Overrides::default(),
+        export_system: None,
     };
     run(&SerialComm, &opts)
 }

@@ -295,7 +295,10 @@ fn reform(
     if pc.is_factored() {
         let t2 = Instant::now();
         pc.invalidate();
+        let s0 = pc.seconds_setup;
         let res = pc.update(comm, k);
+        st.seconds_pc_setup += pc.seconds_setup - s0;
+        st.coarse = pc.coarse.or(st.coarse);
         st.seconds_linear += t2.elapsed().as_secs_f64();
         match res {
             Ok(f) => st.factorizations += f as usize,

@@ -268,7 +268,11 @@ pub fn precond_solve(
     let mut fresh = false;
     let out = loop {
         if factored {
-            match pc.update(comm, pc_of) {
+            let s0 = pc.seconds_setup;
+            let res = pc.update(comm, pc_of);
+            st.seconds_pc_setup += pc.seconds_setup - s0;
+            st.coarse = pc.coarse.or(st.coarse);
+            match res {
                 Ok(f) => {
                     fresh |= f;
                     st.factorizations += f as usize;
@@ -410,12 +414,14 @@ mod tests {
             preconditioner: crate::linalg::PcKind::BlockJacobi,
             pc_lag: 0,
             condense: true,
+            pc_overlap: 1,
             rigid_body_modes: false,
             bfgs_reform: 11,
             fd_delta: 1e-4,
             fd_rule: FdRule::Element,
             char_length: 1.0,
             line_search: false,
+            export_system: None,
         }
     }
     fn ev(rn: f64) -> Eval {

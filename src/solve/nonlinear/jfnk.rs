@@ -153,7 +153,11 @@ fn refresh_preconditioner(
     st.seconds_assembly += t.elapsed().as_secs_f64();
     let t = Instant::now();
     pc.invalidate();
-    let ok = match pc.update(comm, k) {
+    let s0 = pc.seconds_setup;
+    let res = pc.update(comm, k);
+    st.seconds_pc_setup += pc.seconds_setup - s0;
+    st.coarse = pc.coarse.or(st.coarse);
+    let ok = match res {
         Ok(f) => {
             st.factorizations += f as usize;
             true

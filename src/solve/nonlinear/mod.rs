@@ -76,6 +76,8 @@ pub struct NonlinearOptions {
     pub pc_lag: usize,
     /// Condense contact multipliers node by node in the factored preconditioners.
     pub condense: bool,
+    /// Layers of overlap of the Schwarz subdomains.
+    pub pc_overlap: usize,
     /// AMG: the rigid-body rotations as near-null space (`[solver.linear]
     /// rigid_body_modes`).
     pub rigid_body_modes: bool,
@@ -89,6 +91,20 @@ pub struct NonlinearOptions {
     pub char_length: f64,
     /// Backtracking line search on ‖r_free‖ (all solvers).
     pub line_search: bool,
+    /// Write the run's first Newton linear system here (`alfe run --export-system`:
+    /// [`crate::linalg::export`]).
+    pub export_system: Option<std::path::PathBuf>,
+}
+
+impl NonlinearOptions {
+    /// How the factored preconditioners factor.
+    pub fn factor_options(&self) -> crate::linalg::FactorOptions {
+        crate::linalg::FactorOptions {
+            condense: self.condense,
+            overlap: self.pc_overlap,
+            ..Default::default()
+        }
+    }
 }
 
 /// Solve one load step with the chosen solver (see each solver's module).
@@ -139,6 +155,10 @@ pub struct SolveStats {
     pub reason: String,
     pub seconds_assembly: f64,
     pub seconds_linear: f64,
+    /// Of `seconds_linear`, the preconditioner's setups (factorizations, coarse spaces).
+    pub seconds_pc_setup: f64,
+    /// The two-level preconditioner's coarse space after the last setup.
+    pub coarse: Option<crate::linalg::CoarseStats>,
     /// Linear-operator applications that were finite-difference residuals (JFNK).
     pub fd_products: usize,
 }

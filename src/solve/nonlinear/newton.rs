@@ -15,6 +15,9 @@ use crate::parallel::Comm;
 use crate::{ErrorKind, Result};
 use std::time::Instant;
 
+/// The run's first linear system was written ([`NonlinearOptions::export_system`]).
+static EXPORTED: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
 /// Solve r(u) = 0 on the free dofs with u_c = g on `prescribed` (owned local dof, value).
 /// `u` holds the start point and receives the solution; `r` the final residual.
 /// Non-convergence is `Ok` with `converged = false`; only runtime failures are `Err`.
@@ -74,9 +77,16 @@ pub fn newton(
         }
         k.constrain(comm, &cons.dofs);
         st.seconds_assembly += t1.elapsed().as_secs_f64();
+        let export = match &opts.export_system {
+            Some(dir) if !EXPORTED.swap(true, std::sync::atomic::Ordering::Relaxed) => {
+                crate::linalg::export::write_petsc(comm, dir, k, &rhs, pc.points())?;
+                Some((dir, st.clone()))
+            }
+            _ => None,
+        };
         let kref: &DistMatrix = k;
         let mut op = kref;
-        if precond_solve(
+        let solved = precond_solve(
             comm,
             &mut op,
             kref,
@@ -85,9 +95,24 @@ pub fn newton(
             &mut du,
             &opts.linear,
             &mut st,
-        )?
-        .is_none()
-        {
+        )?;
+        if let (Some((dir, before)), Some(gs)) = (export, &solved) {
+            // This very solve's cost, for the peers that solve the written system.
+            let setup = st.seconds_pc_setup - before.seconds_pc_setup;
+            let total = st.seconds_linear - before.seconds_linear;
+            let mut t = [setup, total];
+            comm.allreduce_max(&mut t);
+            crate::linalg::export::write_alfe_solve(
+                comm,
+                dir,
+                opts.preconditioner.name(),
+                t[0],
+                t[1] - t[0],
+                gs.iterations,
+                gs.residual_norm / gs.rhs_norm.max(f64::MIN_POSITIVE),
+            )?;
+        }
+        if solved.is_none() {
             return Ok(st);
         }
         st.iterations += 1;

@@ -14,6 +14,8 @@ pub struct Preconditioning {
     kind: PcKind,
     opts: FactorOptions,
     points: Option<NodePoints>,
+    /// The preconditioner is built with `points`.
+    give_points: bool,
     pc: Box<dyn Preconditioner>,
     /// A successful setup is in place.
     ready: bool,
@@ -22,33 +24,49 @@ pub struct Preconditioning {
     uses: usize,
     /// Setups that factored a matrix.
     pub factorizations: usize,
+    /// Wall time of the setups so far (factorizations, coarse spaces), successful or not.
+    pub seconds_setup: f64,
+    /// The last coarse space set up (kept when a failed setup starts afresh).
+    pub coarse: Option<crate::linalg::CoarseStats>,
 }
 
 impl Preconditioning {
-    /// `condense`: eliminate contact multipliers node by node before factoring
-    /// ([`crate::linalg::condense`]).
-    pub fn new(kind: PcKind, lag: usize, condense: bool) -> Self {
-        let opts = FactorOptions {
-            condense,
-            ..FactorOptions::default()
-        };
+    /// How the factored ones factor: `opts` (contact multipliers condensed node by node,
+    /// [`crate::linalg::condense`]; Schwarz overlap).
+    pub fn new(kind: PcKind, lag: usize, opts: FactorOptions) -> Self {
         Self {
             kind,
             opts,
             points: None,
+            give_points: false,
             pc: preconditioner(kind, opts, None),
             ready: false,
             lag,
             uses: 0,
             factorizations: 0,
+            seconds_setup: 0.0,
+            coarse: None,
         }
     }
 
-    /// Give the owned nodes' reference coordinates (AMG's rigid-body modes).
-    pub fn with_points(mut self, points: NodePoints) -> Self {
+    /// Give the owned nodes' reference coordinates: the coarse space's rigid-body modes
+    /// ([`PcKind::wants_points`]), AMG's if `amg_rotations` (else AMG is unknown-based),
+    /// and the exported system's ([`Self::points`]).
+    pub fn with_points(mut self, points: NodePoints, amg_rotations: bool) -> Self {
+        let give = self.kind.wants_points() || (self.kind == PcKind::Amg && amg_rotations);
         self.points = Some(points);
-        self.pc = preconditioner(self.kind, self.opts, self.points.clone());
+        self.give_points = give;
+        self.pc = preconditioner(self.kind, self.opts, self.given_points());
         self
+    }
+
+    fn given_points(&self) -> Option<NodePoints> {
+        self.points.clone().filter(|_| self.give_points)
+    }
+
+    /// The owned nodes' reference coordinates, if given.
+    pub fn points(&self) -> Option<&[[f64; 3]]> {
+        self.points.as_deref().map(|p| p.as_slice())
     }
 
     pub fn kind(&self) -> PcKind {
@@ -72,9 +90,13 @@ impl Preconditioning {
             self.uses += 1;
             return Ok(false);
         }
+        let t = std::time::Instant::now();
         let res = self.pc.setup(comm, k);
-        if !comm.all_ok(res.is_ok()) {
-            self.pc = preconditioner(self.kind, self.opts, self.points.clone());
+        let ok = comm.all_ok(res.is_ok());
+        self.seconds_setup += t.elapsed().as_secs_f64();
+        self.coarse = self.pc.coarse_stats().or(self.coarse);
+        if !ok {
+            self.pc = preconditioner(self.kind, self.opts, self.given_points());
             self.ready = false;
             let what = match self.kind {
                 PcKind::Asm => "ASM factorization",
@@ -90,6 +112,11 @@ impl Preconditioning {
         self.uses = 0;
         self.factorizations += 1;
         Ok(true)
+    }
+
+    /// The coarse space of a two-level preconditioner, once set up.
+    pub fn coarse_stats(&self) -> Option<crate::linalg::CoarseStats> {
+        self.pc.coarse_stats()
     }
 
     /// Set up again at the next `update` (GMRES stalled on a kept factorization, a step
@@ -124,7 +151,7 @@ mod tests {
             let r: Vec<f64> = (0..n).map(|i| (i as f64).cos()).collect();
             let mut z = [vec![0.0; n], vec![0.0; n]];
             for (i, kind) in [PcKind::Asm, PcKind::BlockJacobi].into_iter().enumerate() {
-                let mut pc = Preconditioning::new(kind, 1, true);
+                let mut pc = Preconditioning::new(kind, 1, FactorOptions::default());
                 assert_eq!(pc.update(c, &m), Ok(true));
                 assert_eq!(pc.update(c, &m), Ok(false));
                 assert_eq!(pc.update(c, &m), Ok(true));
@@ -135,7 +162,7 @@ mod tests {
             }
             let d: Vec<f64> = z[0].iter().zip(&z[1]).map(|(a, b)| a - b).collect();
             assert!(c.norm2(&d) > 1e-6 * c.norm2(&z[1]));
-            let mut none = Preconditioning::new(PcKind::None, 0, true);
+            let mut none = Preconditioning::new(PcKind::None, 0, FactorOptions::default());
             assert_eq!(none.update(c, &m), Ok(false));
             assert!(!none.is_factored());
             let mut y = vec![0.0; n];

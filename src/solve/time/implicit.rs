@@ -148,9 +148,9 @@ pub fn run_implicit(
     let mass = mass_operator(comm, model, analysis.mass);
     let n = model.n_owned_dofs();
     let mut k = model.new_matrix(comm);
-    let mut pc = Preconditioning::new(opts.preconditioner, opts.pc_lag, opts.condense);
-    if opts.rigid_body_modes {
-        pc = pc.with_points(model.node_points());
+    let mut pc = Preconditioning::new(opts.preconditioner, opts.pc_lag, opts.factor_options());
+    if opts.rigid_body_modes || opts.preconditioner.wants_points() || opts.export_system.is_some() {
+        pc = pc.with_points(model.node_points(), opts.rigid_body_modes);
     }
     let mut tot = RunTotals::default();
     let t_start = Instant::now();
