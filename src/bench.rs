@@ -3,13 +3,13 @@
 //! runs PETSc on the exported system beside it), with any preconditioner by name. Also checks the GMRES answer against
 //! the true residual, which the MPI test of the linear solver relies on.
 
-use crate::app::{on_rank0, peak_rss_mb};
 use crate::linalg::gmres::{gmres, GmresOptions};
 use crate::linalg::{preconditioner, BlockJacobi, FactorOptions, PcKind, Preconditioner};
 use crate::model::distribute;
 use crate::model::Model;
 use crate::output::h5::H5File;
 use crate::parallel::Comm;
+use crate::parallel::{on_rank0, peak_rss_mb};
 use crate::partition::partition_elements;
 use crate::{Error, Result};
 use std::path::Path;

@@ -1,11 +1,15 @@
 //! alfe: an MPI-distributed implicit nonlinear finite-element solver for solids in
-//! contact. See `README.md` for use and `DESIGN` notes in each module for the why.
+//! contact. See `README.md` for use, `DESIGN.md` for the map, and each module's
+//! documentation for the why.
 //!
-//! Layers, bottom up: [`parallel`] (moves numbers, knows no physics), [`mesh`],
-//! [`fem`] and [`material`] (physics kernels, know no MPI), [`partition`] (METIS,
-//! ownership, distribution), [`solve`] (distributed linear algebra, nonlinear solvers,
-//! stepping), [`model`] (the distributed FE problem: assembly, constraints, loads),
-//! [`scene`] (decks), [`output`] (HDF5/XDMF, CSV, JSON), [`app`] (what `alfe run` does).
+//! Layers, bottom up (`DESIGN.md`, enforced by `tests/layers.rs`): [`error`], [`curve`] and
+//! [`parallel`] (moves numbers, knows no physics); [`mesh`] and [`material`]; [`fem`]
+//! (element kernels; with the layers above, no MPI); [`contact`] (pointwise laws and
+//! shapes), [`linalg`] (distributed matrices, GMRES, preconditioners) and [`partition`]
+//! (METIS, ownership, distribution); [`model`] (the distributed problem as a list of
+//! contributions); [`solve`] (nonlinear solvers, stepping, time integration); [`output`]
+//! (HDF5/XDMF, CSV, JSON, restart files); [`scene`] (decks); [`app`] (what the commands
+//! do), and the benchmarks.
 
 pub mod app;
 pub mod bench;

@@ -354,7 +354,7 @@ fn main_inner(comm: &dyn Comm, raw: Vec<String>) -> Result<()> {
         } => {
             let t = target(t);
             let o = study.overrides();
-            let r = app::on_rank0(comm, || app::check(&t, ranks as usize, &o))?;
+            let r = alfe::parallel::on_rank0(comm, || app::check(&t, ranks as usize, &o))?;
             if let Some(s) = r {
                 print!("{s}");
             }
@@ -366,7 +366,8 @@ fn main_inner(comm: &dyn Comm, raw: Vec<String>) -> Result<()> {
             partitions,
         } => {
             let t = target(t);
-            let r = app::on_rank0(comm, || app::partition(&t, ranks as usize, &partitions))?;
+            let r =
+                alfe::parallel::on_rank0(comm, || app::partition(&t, ranks as usize, &partitions))?;
             if let Some(s) = r {
                 print!("{s}");
             }

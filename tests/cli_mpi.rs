@@ -255,6 +255,10 @@ fn cantilever_same_on_one_and_two_ranks_with_clamp_and_load_on_different_ranks()
     let s: serde_json::Value = read_json(&dir.join("r2/summary.json"));
     assert_eq!(s["ranks"], 2);
     assert_eq!(s["converged"], true);
+    assert!(
+        s["failure_reason"].is_null(),
+        "a converged run has no failure: {s}"
+    );
     assert_eq!(s["steps"], 10);
     assert_eq!(s["partition"], "computed");
     for key in [
@@ -733,6 +737,10 @@ fn non_convergence_ends_cleanly_with_converged_steps_written() {
         )
         .unwrap();
         assert_eq!(s["converged"], false);
+        assert_eq!(
+            s["failure_reason"], "element",
+            "the last attempt met an inverted element: {s}"
+        );
         let steps = s["steps"].as_u64().unwrap() as usize;
         assert!(steps >= 2, "t = 0.25 and 0.5 converge: {s}");
         assert!(

@@ -20,7 +20,7 @@
 //! Known limit (Wriggers & Reese 1996): under large compression an EAS element can show
 //! hourglass instabilities; `reduced` is the element for that.
 
-use super::element::{
+use super::kinematics::{
     add_force, add_tangent, cofactor, deformation_gradient, reference_point, ElementError,
     LocalTangent,
 };
@@ -273,7 +273,7 @@ pub fn force(
     for g in 0..8 {
         let sp = sps[g].as_ref().expect("evaluated");
         let grad: [[f64; 3]; 8] = if finite {
-            super::element::transform_gradients(&finv[g].transpose(), &r.grad0[g])
+            super::kinematics::transform_gradients(&finv[g].transpose(), &r.grad0[g])
         } else {
             r.grad0[g]
         };

@@ -39,7 +39,7 @@
 //! definite for the condensation (`linalg/condense.rs`), which eliminates it
 //! exactly: the factored matrix has only the displacements.
 
-use super::element::{
+use super::kinematics::{
     add_fbar_tangent, add_force, add_tangent, element_kinematics, ElementError, LocalTangent,
 };
 use super::shape::HEX8;

@@ -4,6 +4,7 @@
 pub mod eas;
 pub mod element;
 pub mod hybrid;
+pub mod kinematics;
 pub mod mass;
 pub mod reduced;
 pub mod shape;

@@ -22,7 +22,7 @@
 //! stays positive at any strain. The volumetric part is one constant per element, so
 //! nearly incompressible materials do not lock.
 
-use super::element::{
+use super::kinematics::{
     add_force, add_tangent, cofactor, deformation_gradient, reference_point, transform_gradients,
     ElementError, LocalTangent,
 };

@@ -19,9 +19,8 @@
 //! Rows of the constrained matrix arrive already constrained: [`DistMatrix::constrain`]
 //! zeroes the rows and the columns of constrained dofs in every rank's rows.
 
-use super::block_jacobi::{
-    FactorOptions, Factorization, FillOrdering, LocalBlockPattern, LocalFactor,
-};
+use super::block_jacobi::{FactorOptions, Factorization, FillOrdering, LocalFactor};
+use super::block_pattern::LocalBlockPattern;
 use super::coarse::{LocalSolver, RingCoupling};
 use super::{DistMatrix, Preconditioner};
 use crate::parallel::{Comm, HaloPlan};

@@ -33,6 +33,7 @@
 //! means the block is singular to working precision and is reported as an `Err`.
 //! Factorization is local: callers agree on failure across ranks with `Comm::all_ok`.
 
+use super::block_pattern::LocalBlockPattern;
 use super::border::Border;
 use super::coarse::{LocalSolver, RingCoupling};
 use super::condense::Condensation;
@@ -108,29 +109,6 @@ enum Factor {
     NdLu,
     /// Values in `BlockJacobi::llt_values`, structure in `symbolic_llt`.
     Llt,
-}
-
-/// A square local block matrix (3×3 blocks, scalar size 3·`n_nodes`) as block rows of
-/// (local block column, entry) pairs: entry e's values are `vals[9e..9e + 9]` (row-major)
-/// of the value array given to [`LocalFactor::new`] / [`LocalFactor::refactor`]. Rows may
-/// list their columns in any order; a (row, column) pair appears at most once.
-#[derive(Debug, Clone, Default)]
-pub struct LocalBlockPattern {
-    pub n_nodes: usize,
-    /// Row `i`'s pairs are `row_ptr[i]..row_ptr[i + 1]`.
-    pub row_ptr: Vec<usize>,
-    pub cols: Vec<usize>,
-    pub entries: Vec<usize>,
-    /// Rows that belong to one element alone (a hybrid hex8's pressure block); empty if
-    /// none. See [`DistMatrix::set_element_rows`].
-    pub element_rows: Vec<bool>,
-}
-
-impl LocalBlockPattern {
-    /// Whether row `i` belongs to one element alone.
-    pub fn is_element_row(&self, i: usize) -> bool {
-        self.element_rows.get(i).copied().unwrap_or(false)
-    }
 }
 
 /// The exact sparse factorization of a local block matrix ([`LocalBlockPattern`]): the

@@ -17,7 +17,7 @@
 //! exactly, at the price of 3·(border blocks) extra interior solves per factorization
 //! and a dense LU of S.
 
-use super::block_jacobi::LocalBlockPattern;
+use super::block_pattern::LocalBlockPattern;
 use nalgebra::{DMatrix, DVector};
 
 /// Block rows with more blocks than max([`MIN_DENSE`], 10 √n) are set aside.

@@ -41,7 +41,7 @@
 //! reference node) are not attached and stay in the factored matrix: eliminating them
 //! would fill the block of every node they touch.
 
-use super::block_jacobi::LocalBlockPattern;
+use super::block_pattern::LocalBlockPattern;
 
 /// The relative regularization δ of singular attached diagonal blocks before an exact
 /// factorization (see the module documentation).

@@ -11,6 +11,7 @@
 pub mod amg;
 pub mod asm;
 pub mod block_jacobi;
+pub mod block_pattern;
 pub mod border;
 pub mod coarse;
 pub mod condense;
@@ -25,9 +26,8 @@ pub mod two_level;
 pub use amg::{BoomerAmg, NodePoints};
 
 pub use asm::RestrictedSchwarz;
-pub use block_jacobi::{
-    BlockJacobi, FactorOptions, Factorization, FillOrdering, LocalBlockPattern, LocalFactor,
-};
+pub use block_jacobi::{BlockJacobi, FactorOptions, Factorization, FillOrdering, LocalFactor};
+pub use block_pattern::LocalBlockPattern;
 pub use coarse::{CoarseMode, CoarseStats};
 pub use gmres::{gmres, GmresOptions, GmresStats};
 pub use two_level::TwoLevel;

@@ -16,6 +16,7 @@ pub mod kind;
 pub mod loads;
 pub mod local;
 pub mod mat3;
+pub mod pairing;
 pub mod pairs;
 pub mod solids;
 pub mod walls;

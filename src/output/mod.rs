@@ -9,6 +9,7 @@ pub mod log;
 pub mod quantities;
 pub mod record;
 pub mod results;
+pub mod schedule;
 pub mod xdmf;
 
 pub use h5::H5File;

@@ -1,23 +1,17 @@
 //! Deck validation of the analysis table (static, implicit and explicit dynamics), the
 //! dynamic output keys and initial velocities. Errors name the deck field.
 
+use super::check::{err, MAX_STEPS};
+use super::context::Context;
 use super::deck::*;
-use crate::{Error, Result};
-use std::collections::{BTreeMap, BTreeSet};
-
-fn err(field: impl std::fmt::Display, msg: impl std::fmt::Display) -> Error {
-    Error::input(format!("{field}: {msg}"))
-}
+use crate::Result;
+use std::collections::BTreeMap;
 
 fn kind_name(k: AnalysisKind) -> &'static str {
     k.name()
 }
 
 /// `[analysis]` and the output keys that depend on it.
-/// The most steps a deck may ask for at its nominal step (10 million: weeks of solving,
-/// and the step list alone would take gigabytes beyond it).
-pub const MAX_STEPS: f64 = 1e7;
-
 pub fn check_analysis(deck: &Deck) -> Result<()> {
     let a = &deck.analysis;
     let kind = kind_name(a.kind);
@@ -148,9 +142,8 @@ pub fn check_analysis(deck: &Deck) -> Result<()> {
 /// node set `part:<name>` (added to `sets`).
 pub fn initial_velocities(
     deck: &Deck,
-    part_nodes: &[BTreeSet<usize>],
+    ctx: &Context,
     sets: &mut BTreeMap<String, Vec<usize>>,
-    set_nodes: &dyn Fn(String, &str) -> Result<Vec<usize>>,
 ) -> Result<Vec<(String, [f64; 3])>> {
     let mut out = Vec::new();
     for (i, iv) in deck.initial_velocity.iter().enumerate() {
@@ -168,11 +161,11 @@ pub fn initial_velocities(
                     ));
                 };
                 let name = format!("part:{p}");
-                sets.insert(name.clone(), part_nodes[pi].iter().copied().collect());
+                sets.insert(name.clone(), ctx.part_nodes[pi].iter().copied().collect());
                 name
             }
             (None, Some(s)) => {
-                let nodes = set_nodes(format!("{f}.set"), s)?;
+                let nodes = ctx.set_nodes(format!("{f}.set"), s)?;
                 sets.insert(s.clone(), nodes);
                 s.clone()
             }
@@ -188,7 +181,7 @@ pub fn initial_velocities(
 pub fn check_dynamic_inputs(
     deck: &Deck,
     part_material: &[usize],
-    set_nodes: &dyn Fn(String, &str) -> Result<Vec<usize>>,
+    ctx: &Context,
     sets: &mut BTreeMap<String, Vec<usize>>,
 ) -> Result<()> {
     if deck.analysis.kind != AnalysisKind::Static {
@@ -206,7 +199,7 @@ pub fn check_dynamic_inputs(
         }
     }
     for (i, n) in deck.output.displacements.iter().enumerate() {
-        let nodes = set_nodes(format!("output.displacements[{i}]"), n)?;
+        let nodes = ctx.set_nodes(format!("output.displacements[{i}]"), n)?;
         sets.insert(n.clone(), nodes);
     }
     Ok(())

@@ -4,11 +4,17 @@
 //! only what the scene parses the deck into.
 
 pub mod build;
+mod check;
+mod context;
 pub mod coupling;
 pub mod deck;
 mod dynamics;
+mod loads;
 pub mod overrides;
 pub mod pairs;
+mod parts;
+mod sets;
+mod settings;
 pub mod steps;
 pub mod walls;
 

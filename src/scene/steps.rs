@@ -8,34 +8,13 @@
 //! where the resolved curves change slope: those times and the steps' ends become the
 //! stops the step controller lands on.
 
-use super::build::err;
+use super::check::{err, known, unique_names, MAX_STEPS};
 use super::deck::Deck;
 use crate::curve::Curve;
 use crate::solve::Stage;
 use crate::Result;
-use serde::{Deserialize, Serialize};
 use std::cell::RefCell;
 use std::collections::BTreeMap;
-
-/// One `[[steps]]` entry.
-#[derive(Debug, Clone, Deserialize, Serialize)]
-#[serde(deny_unknown_fields)]
-pub struct StepDeck {
-    pub name: String,
-    /// Length of the step on the time line (Abaqus's time period).
-    pub duration: f64,
-    /// First increment, smallest cut and largest growth (default: `[analysis]`'s).
-    #[serde(default)]
-    pub step: Option<f64>,
-    #[serde(default)]
-    pub min_step: Option<f64>,
-    #[serde(default)]
-    pub max_step: Option<f64>,
-    /// Static runs: write fields every n-th increment of this step (default `[output]
-    /// every`); a step's last increment is always written.
-    #[serde(default)]
-    pub output_every: Option<usize>,
-}
 
 /// The deck with `analysis.end_time` filled in from its steps (their total duration),
 /// checked against a given one.
@@ -69,7 +48,7 @@ pub fn with_end_time(deck: &Deck) -> Result<Deck> {
 
 /// The stages of the deck's steps, validated (empty without steps).
 pub fn stages(deck: &Deck) -> Result<Vec<Stage>> {
-    super::build::unique_names("steps", deck.steps.iter().map(|s| s.name.as_str()))?;
+    unique_names("steps", deck.steps.iter().map(|s| s.name.as_str()))?;
     let a = &deck.analysis;
     let mut start = 0.0;
     let mut out = Vec::new();
@@ -96,14 +75,14 @@ pub fn stages(deck: &Deck) -> Result<Vec<Stage>> {
                 }
             }
         }
-        if s.duration / step > super::dynamics::MAX_STEPS {
+        if s.duration / step > MAX_STEPS {
             return Err(err(
                 format!("{f}.step"),
                 format!(
                     "{step:e} makes {:.3e} increments of the step's duration {:e}; expected at most {:.0e}",
                     s.duration / step,
                     s.duration,
-                    super::dynamics::MAX_STEPS
+                    MAX_STEPS
                 ),
             ));
         }
@@ -232,10 +211,7 @@ impl<'a> Timeline<'a> {
         self.curves.get(name).cloned().ok_or_else(|| {
             err(
                 field,
-                format!(
-                    "unknown curve `{name}` ({})",
-                    super::build::known(self.curves)
-                ),
+                format!("unknown curve `{name}` ({})", known(self.curves)),
             )
         })
     }

@@ -5,249 +5,21 @@
 //! also be `type = "free"` or `type = "force"` (free, loaded by `scale × curve`), with
 //! body-fixed points to `trace`.
 
-use crate::contact::law::{Threshold, DEFAULT_TANGENTIAL_AUGMENTATION};
+use super::check::{err, positive, unique_names, unit};
+use super::context::Context;
+use super::deck::{DofType, SegmentDeck, ShapeKind, WallDeck, WallMotionDeck};
+use crate::contact::law::DEFAULT_TANGENTIAL_AUGMENTATION;
 use crate::contact::motion::{DofMotion, MotionKind, RigidMotion, DOF_NAMES};
-use crate::contact::wall::{project, ContactMethod, ShapeDef};
+use crate::contact::wall::{project, ShapeDef};
 use crate::curve::Curve;
 use crate::mesh::select::tributary_areas;
-use crate::mesh::{FaceRef, Mesh};
 use crate::model::body::BodyDef;
 use crate::model::walls::WallDef;
-use crate::{Error, Result};
-use serde::{Deserialize, Serialize};
+use crate::Result;
 use std::collections::BTreeSet;
-
-/// The shape keyword of a wall.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum ShapeKind {
-    Plane,
-    FinitePlane,
-    Cylinder,
-    Sphere,
-    Prism,
-    Ellipsoid,
-    Torus,
-}
-
-/// A rigid wall. Its local frame: origin `point`, z along `normal` (plane normal,
-/// cylinder axis), x along `x_axis` (made orthogonal to z). Plane and finite plane face
-/// +z; the cylinder is centred on `point`; a prism is a box centred on `point`.
-#[derive(Debug, Clone, Deserialize, Serialize)]
-#[serde(deny_unknown_fields)]
-pub struct WallDeck {
-    pub name: String,
-    pub shape: ShapeKind,
-    #[serde(default)]
-    pub point: [f64; 3],
-    #[serde(default = "ez")]
-    pub normal: [f64; 3],
-    #[serde(default)]
-    pub x_axis: Option<[f64; 3]>,
-    /// finite-plane [lx, ly]; prism [lx, ly, lz]; plane [display size].
-    #[serde(default)]
-    pub size: Option<Vec<f64>>,
-    #[serde(default)]
-    pub radius: Option<f64>,
-    /// Cylinder length along its axis.
-    #[serde(default)]
-    pub length: Option<f64>,
-    /// Ellipsoid: semi-axes [a, b, c] along x_axis, y and normal; torus: [R, r], the
-    /// centre circle's radius (about `normal`) and the tube's.
-    #[serde(default)]
-    pub radii: Option<Vec<f64>>,
-    /// Tracked nodes: a node set or surface name ...
-    #[serde(default)]
-    pub nodes: Option<String>,
-    /// ... or every node on a part's boundary.
-    #[serde(default)]
-    pub part: Option<String>,
-    #[serde(default)]
-    pub friction: f64,
-    #[serde(default)]
-    pub method: ContactMethod,
-    /// ALM scale κ (force/length); default: each node's stiffness diagonal.
-    #[serde(default)]
-    pub kappa: Option<f64>,
-    /// Penalty stiffness / nodal stiffness (default 1: the stiffest that converges on
-    /// every wall scene; 0.1, LS-DYNA's SLSFAC default, gave 60 % less Hertz force,
-    /// `scripts/penalty-study`).
-    #[serde(default = "d_penalty_scale")]
-    pub penalty_scale: f64,
-    /// ALM's tangential augmentation α (stick stiffness α κ); default
-    /// [`DEFAULT_TANGENTIAL_AUGMENTATION`].
-    #[serde(default)]
-    pub tangential_augmentation: Option<f64>,
-    /// ALM's friction threshold: "multiplier" (μ max(λ_N, 0), the paper's, default) or
-    /// "augmented" (μ max(λ_N − g_N, 0)).
-    #[serde(default)]
-    pub friction_threshold: Threshold,
-    /// ALM: lock a node in stick after this many stick/slip flips within a step (within
-    /// a 2 % margin of the cone; 0 = never, the default).
-    #[serde(default)]
-    pub stick_lock_flips: u32,
-    #[serde(default)]
-    pub motion: Option<WallMotionDeck>,
-    /// Entities: body-fixed points whose paths are reported.
-    #[serde(default)]
-    pub trace: Option<Vec<TraceDeck>>,
-    /// Entities in dynamics: the body's mass and its (isotropic) moment of inertia
-    /// about the reference point; without them its free DOFs are massless.
-    #[serde(default)]
-    pub mass: Option<f64>,
-    #[serde(default)]
-    pub inertia: Option<f64>,
-    /// Entities in dynamics: initial velocity of the reference point and angular
-    /// velocity (radians per unit time).
-    #[serde(default)]
-    pub velocity: Option<[f64; 3]>,
-    #[serde(default)]
-    pub spin: Option<[f64; 3]>,
-}
-
-/// A body-fixed point of an entity, by its position at t = 0.
-#[derive(Debug, Clone, Deserialize, Serialize)]
-#[serde(deny_unknown_fields)]
-pub struct TraceDeck {
-    pub name: String,
-    pub point: [f64; 3],
-}
-
-/// What drives one DOF: a displacement or velocity curve (prescribed), or, for
-/// entities, nothing (`free`) or a force or moment curve (`force`: free and loaded).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize)]
-#[serde(rename_all = "lowercase")]
-pub enum DofType {
-    Displacement,
-    Velocity,
-    Free,
-    Force,
-}
-
-/// Prescribed rigid motion, in one of three forms (not mixed):
-/// * one direction: translation `translation × c(t)` and a rotation by `angle × c(t)`
-///   (radians, right hand) about `axis` through the wall's moving origin;
-/// * per degree of freedom: `ux`, `uy`, `uz`, `rx`, `ry`, `rz`, each
-///   `{ curve = "name", scale = s, type = "velocity" }` (LS-DYNA's
-///   `*BOUNDARY_PRESCRIBED_MOTION_RIGID`); rx, ry, rz are the rotation vector's
-///   components;
-/// * `segments` in sequence, each `{ to = t, translation = [...], rotation = [...] }`
-///   moving linearly in time from the previous segment's end (t = 0 for the first) by
-///   those increments: press, then slide, then lift.
-///
-/// `type = "velocity"` integrates the curves instead. Default curves: a ramp 0 → 1 over
-/// the analysis for displacements, the constant 1 for velocities.
-#[derive(Debug, Clone, Deserialize, Serialize)]
-#[serde(deny_unknown_fields)]
-pub struct WallMotionDeck {
-    #[serde(default, rename = "type")]
-    pub kind: MotionKind,
-    #[serde(default, deserialize_with = "one_vector")]
-    pub translation: Option<[f64; 3]>,
-    #[serde(default)]
-    pub curve: Option<String>,
-    #[serde(default)]
-    pub axis: Option<[f64; 3]>,
-    #[serde(default)]
-    pub angle: Option<f64>,
-    #[serde(default)]
-    pub rotation_curve: Option<String>,
-    #[serde(default)]
-    pub ux: Option<DofDeck>,
-    #[serde(default)]
-    pub uy: Option<DofDeck>,
-    #[serde(default)]
-    pub uz: Option<DofDeck>,
-    #[serde(default)]
-    pub rx: Option<DofDeck>,
-    #[serde(default)]
-    pub ry: Option<DofDeck>,
-    #[serde(default)]
-    pub rz: Option<DofDeck>,
-    #[serde(default)]
-    pub segments: Option<Vec<SegmentDeck>>,
-}
-
-/// One DOF: `scale × c(t)`, or `scale × ∫c` with `type = "velocity"` (default: the
-/// motion's `type`); for entities `type = "free"`, or `type = "force"`: free and loaded
-/// by `scale × c(t)` (a force, or a moment for rx … rz).
-#[derive(Debug, Clone, Deserialize, Serialize)]
-#[serde(deny_unknown_fields)]
-pub struct DofDeck {
-    #[serde(default)]
-    pub curve: Option<String>,
-    #[serde(default = "one")]
-    pub scale: f64,
-    #[serde(default, rename = "type")]
-    pub kind: Option<DofType>,
-}
-
-/// One segment of a motion in sequence: by `translation` and `rotation` (rotation-vector
-/// increment, radians) linearly in time until `to`.
-#[derive(Debug, Clone, Deserialize, Serialize)]
-#[serde(deny_unknown_fields)]
-pub struct SegmentDeck {
-    pub to: f64,
-    #[serde(default)]
-    pub translation: [f64; 3],
-    #[serde(default)]
-    pub rotation: [f64; 3],
-}
-
-fn one() -> f64 {
-    1.0
-}
-
-/// `translation` is one vector; a list of vectors (a new user's way to write "press,
-/// then slide") gets the form that does it.
-fn one_vector<'de, D: serde::Deserializer<'de>>(
-    d: D,
-) -> std::result::Result<Option<[f64; 3]>, D::Error> {
-    use serde::de::Error as _;
-    let v = toml::Value::deserialize(d)?;
-    let num = |x: &toml::Value| x.as_float().or_else(|| x.as_integer().map(|i| i as f64));
-    match &v {
-        toml::Value::Array(a) if a.len() == 3 && a.iter().all(|x| num(x).is_some()) => Ok(Some([
-            num(&a[0]).unwrap(),
-            num(&a[1]).unwrap(),
-            num(&a[2]).unwrap(),
-        ])),
-        toml::Value::Array(a) if a.iter().any(|x| x.is_array()) => Err(D::Error::custom(
-            "expected one vector [x, y, z] (the motion's total); for motions in sequence \
-             (press, then slide) write `segments = [{ to = 1.0, translation = [0, 0, -2] }, \
-             { to = 2.0, translation = [20, 0, 0] }]`, or give each DOF a curve \
-             (`ux = { curve = \"name\" }`)",
-        )),
-        other => Err(D::Error::custom(format!(
-            "expected one vector [x, y, z], got {other}"
-        ))),
-    }
-}
-
-fn ez() -> [f64; 3] {
-    [0.0, 0.0, 1.0]
-}
-fn d_penalty_scale() -> f64 {
-    1.0
-}
-
-fn err(field: impl std::fmt::Display, msg: impl std::fmt::Display) -> Error {
-    Error::input(format!("{field}: {msg}"))
-}
 
 fn norm(a: [f64; 3]) -> f64 {
     (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt()
-}
-
-fn unit(field: String, a: [f64; 3]) -> Result<[f64; 3]> {
-    let n = norm(a);
-    if !(n > 0.0 && n.is_finite()) {
-        return Err(err(
-            field,
-            format!("expected a non-zero direction, got {a:?}"),
-        ));
-    }
-    Ok([a[0] / n, a[1] / n, a[2] / n])
 }
 
 fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
@@ -256,18 +28,6 @@ fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
         a[2] * b[0] - a[0] * b[2],
         a[0] * b[1] - a[1] * b[0],
     ]
-}
-
-/// What a wall needs from the rest of the deck.
-pub struct WallInputs<'a> {
-    pub mesh: &'a Mesh,
-    pub boundary: &'a [FaceRef],
-    pub part_names: Vec<String>,
-    pub part_nodes: &'a [BTreeSet<usize>],
-    pub set_nodes: &'a dyn Fn(String, &str) -> Result<Vec<usize>>,
-    pub curve: &'a dyn Fn(String, &Option<String>) -> Result<Curve>,
-    /// Tolerance for "starts inside" (a small fraction of the model size).
-    pub tol: f64,
 }
 
 /// Free DOFs of an entity and their loads.
@@ -280,7 +40,7 @@ fn build_motion(
     mf: &str,
     origin: [f64; 3],
     axes: [[f64; 3]; 3],
-    inp: &WallInputs,
+    ctx: &Context,
     entity: bool,
 ) -> Result<(RigidMotion, FreeDofs)> {
     let mut motion = RigidMotion::fixed(origin, axes);
@@ -288,7 +48,7 @@ fn build_motion(
     let curve = |field: &str, name: &Option<String>, kind: MotionKind| -> Result<Curve> {
         match (name, kind) {
             (None, MotionKind::Velocity) => Ok(Curve::constant(1.0)),
-            _ => (inp.curve)(format!("{mf}.{field}"), name),
+            _ => ctx.curve(format!("{mf}.{field}"), name),
         }
     };
     let one_direction = m.translation.is_some()
@@ -377,7 +137,7 @@ fn build_motion(
                     }
                     free.0[i] = true;
                     if t == DofType::Force {
-                        let c = (inp.curve)(format!("{mf}.{name}.curve"), &d.curve)?;
+                        let c = ctx.curve(format!("{mf}.{name}.curve"), &d.curve)?;
                         free.1[i] = Some((d.scale, c));
                     } else if d.curve.is_some() || d.scale != 1.0 {
                         return Err(err(
@@ -479,12 +239,16 @@ fn segments(segs: &[SegmentDeck], mf: &str) -> Result<[Option<DofMotion>; 6]> {
 }
 
 /// Validate and build every `[[walls]]` entry, or every `[[entities]]` one (`section`).
-pub fn build_walls(decks: &[WallDeck], inp: &WallInputs, section: &str) -> Result<Vec<WallDef>> {
-    super::build::unique_names(section, decks.iter().map(|d| d.name.as_str()))?;
+pub(super) fn build_walls(
+    decks: &[WallDeck],
+    ctx: &Context,
+    section: &str,
+) -> Result<Vec<WallDef>> {
+    unique_names(section, decks.iter().map(|d| d.name.as_str()))?;
     let mut out = Vec::new();
     for (i, w) in decks.iter().enumerate() {
         let f = format!("{section}[{i}]");
-        out.push(build_wall(w, &f, inp, section == "entities")?);
+        out.push(build_wall(w, &f, ctx, section == "entities")?);
     }
     Ok(out)
 }
@@ -498,14 +262,6 @@ fn body_length(shape: &ShapeDef, model_size: f64) -> f64 {
         ShapeDef::Plane { .. } => 0.5 * model_size,
         ShapeDef::Ellipsoid { radii } => radii[0].max(radii[1]).max(radii[2]),
         ShapeDef::Torus { radius, tube } => radius + tube,
-    }
-}
-
-fn positive(field: String, v: Option<f64>, what: &str) -> Result<f64> {
-    match v {
-        Some(x) if x > 0.0 && x.is_finite() => Ok(x),
-        Some(x) => Err(err(field, format!("expected a positive {what}, got {x}"))),
-        None => Err(err(field, format!("missing (the {what} of this shape)"))),
     }
 }
 
@@ -623,11 +379,8 @@ fn shape_def(w: &WallDeck, f: &str) -> Result<ShapeDef> {
     })
 }
 
-fn build_wall(w: &WallDeck, f: &str, inp: &WallInputs, entity: bool) -> Result<WallDef> {
-    let mut shape = shape_def(w, f)?;
-    if w.point.iter().any(|x| !x.is_finite()) {
-        return Err(err(format!("{f}.point"), "expected finite numbers"));
-    }
+/// The wall's frame: `normal` as e_z, `x_axis` (or a default) made orthogonal to it.
+fn wall_axes(w: &WallDeck, f: &str) -> Result<[[f64; 3]; 3]> {
     let ez = unit(format!("{f}.normal"), w.normal)?;
     let guess = match w.x_axis {
         Some(x) => unit(format!("{f}.x_axis"), x)?,
@@ -648,6 +401,11 @@ fn build_wall(w: &WallDeck, f: &str, inp: &WallInputs, entity: bool) -> Result<W
     }
     let ex = unit(format!("{f}.x_axis"), ex)?;
     let ey = cross(ez, ex);
+    Ok([ex, ey, ez])
+}
+
+/// Friction, κ, the tangential augmentation and the penalty scale in range.
+fn check_wall_numbers(w: &WallDeck, f: &str) -> Result<()> {
     if !(w.friction >= 0.0 && w.friction.is_finite()) {
         return Err(err(
             format!("{f}.friction"),
@@ -676,23 +434,29 @@ fn build_wall(w: &WallDeck, f: &str, inp: &WallInputs, entity: bool) -> Result<W
             format!("expected a positive factor, got {}", w.penalty_scale),
         ));
     }
-    // Tracked nodes.
+    Ok(())
+}
+
+/// The tracked nodes (a node set, or a part's boundary), the name they go by, and each
+/// node's tributary area on the tracked surface (boundary faces whose nodes are all
+/// tracked).
+fn tracked_nodes(w: &WallDeck, f: &str, ctx: &Context) -> Result<(String, Vec<usize>, Vec<f64>)> {
     let (set, nodes) = match (&w.nodes, &w.part) {
-        (Some(s), None) => (s.clone(), (inp.set_nodes)(format!("{f}.nodes"), s)?),
+        (Some(s), None) => (s.clone(), ctx.set_nodes(format!("{f}.nodes"), s)?),
         (None, Some(p)) => {
-            let Some(pi) = inp.part_names.iter().position(|q| q == p) else {
+            let Some(pi) = ctx.part_names.iter().position(|q| q == p) else {
                 return Err(err(
                     format!("{f}.part"),
-                    format!("unknown part `{p}` (parts: {})", inp.part_names.join(", ")),
+                    format!("unknown part `{p}` (parts: {})", ctx.part_names.join(", ")),
                 ));
             };
             let mut v: BTreeSet<usize> = BTreeSet::new();
-            for fr in inp.boundary {
-                if inp.mesh.elem_part[fr.elem] as usize == pi {
-                    v.extend(inp.mesh.face_nodes(*fr));
+            for fr in ctx.boundary {
+                if ctx.mesh.elem_part[fr.elem] as usize == pi {
+                    v.extend(ctx.mesh.face_nodes(*fr));
                 }
             }
-            debug_assert!(v.iter().all(|n| inp.part_nodes[pi].contains(n)));
+            debug_assert!(v.iter().all(|n| ctx.part_nodes[pi].contains(n)));
             (format!("boundary of part {p}"), v.into_iter().collect())
         }
         _ => {
@@ -702,12 +466,11 @@ fn build_wall(w: &WallDeck, f: &str, inp: &WallInputs, entity: bool) -> Result<W
             ))
         }
     };
-    // Tributary areas on the tracked surface: boundary faces whose nodes are all tracked.
     let tracked: BTreeSet<usize> = nodes.iter().copied().collect();
     let area = tributary_areas(
-        inp.mesh,
-        inp.boundary.iter().filter(|fr| {
-            inp.mesh
+        ctx.mesh,
+        ctx.boundary.iter().filter(|fr| {
+            ctx.mesh
                 .face_nodes(**fr)
                 .iter()
                 .all(|n| tracked.contains(n))
@@ -717,6 +480,17 @@ fn build_wall(w: &WallDeck, f: &str, inp: &WallInputs, entity: bool) -> Result<W
         .iter()
         .map(|n| area.get(n).copied().unwrap_or(0.0))
         .collect();
+    Ok((set, nodes, areas))
+}
+
+fn build_wall(w: &WallDeck, f: &str, ctx: &Context, entity: bool) -> Result<WallDef> {
+    let mut shape = shape_def(w, f)?;
+    if w.point.iter().any(|x| !x.is_finite()) {
+        return Err(err(format!("{f}.point"), "expected finite numbers"));
+    }
+    let [ex, ey, ez] = wall_axes(w, f)?;
+    check_wall_numbers(w, f)?;
+    let (set, nodes, areas) = tracked_nodes(w, f, ctx)?;
     let (motion, (free, loads)) = match &w.motion {
         None => (
             RigidMotion::fixed(w.point, [ex, ey, ez]),
@@ -727,7 +501,7 @@ fn build_wall(w: &WallDeck, f: &str, inp: &WallInputs, entity: bool) -> Result<W
             &format!("{f}.motion"),
             w.point,
             [ex, ey, ez],
-            inp,
+            ctx,
             entity,
         )?,
     };
@@ -738,7 +512,7 @@ fn build_wall(w: &WallDeck, f: &str, inp: &WallInputs, entity: bool) -> Result<W
         )),
         (None, _) => Vec::new(),
         (Some(t), true) => {
-            super::build::unique_names(&format!("{f}.trace"), t.iter().map(|p| p.name.as_str()))?;
+            unique_names(&format!("{f}.trace"), t.iter().map(|p| p.name.as_str()))?;
             let mut v = Vec::new();
             for (k, p) in t.iter().enumerate() {
                 let ok = !p.name.is_empty()
@@ -799,7 +573,7 @@ fn build_wall(w: &WallDeck, f: &str, inp: &WallInputs, entity: bool) -> Result<W
     {
         if *display_size == 0.0 {
             let pose = motion.pose(0.0);
-            let (lo, hi) = crate::mesh::select::bounding_box(inp.mesh);
+            let (lo, hi) = crate::mesh::select::bounding_box(ctx.mesh);
             let (mut a, mut b) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
             for k in 0..8 {
                 let c = std::array::from_fn(|i| if k >> i & 1 == 0 { lo[i] } else { hi[i] });
@@ -813,12 +587,12 @@ fn build_wall(w: &WallDeck, f: &str, inp: &WallInputs, entity: bool) -> Result<W
             *display_size = if extent > 0.0 {
                 1.2 * extent
             } else {
-                2e9 * inp.tol
+                2e9 * ctx.tol
             };
             *display_center = [0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1])];
         }
     }
-    let length = body_length(&shape, 2e9 * inp.tol);
+    let length = body_length(&shape, 2e9 * ctx.tol);
     let def = WallDef {
         name: w.name.clone(),
         shape,
@@ -852,9 +626,9 @@ fn build_wall(w: &WallDeck, f: &str, inp: &WallInputs, entity: bool) -> Result<W
     let s = def.shape.build();
     let pose0 = def.motion.pose(0.0);
     for &n in &def.nodes {
-        let x = inp.mesh.coords[n];
+        let x = ctx.mesh.coords[n];
         if let Some(p) = project(s.as_ref(), &pose0, &pose0, x, None) {
-            if p.gap < -inp.tol {
+            if p.gap < -ctx.tol {
                 return Err(err(
                     f,
                     format!(

@@ -5,6 +5,7 @@
 pub mod analysis;
 pub mod control;
 pub mod nonlinear;
+pub mod record;
 pub mod stepping;
 pub mod time;
 

@@ -46,7 +46,7 @@
 
 use super::common::{evaluate, precond_solve, Constraints, Eval, Monitor, Verdict};
 use super::Preconditioning;
-use super::{NonlinearOptions, NonlinearProblem, SolveStats};
+use super::{Failure, NonlinearOptions, NonlinearProblem, SolveStats};
 use crate::linalg::matrix::DistMatrix;
 use crate::parallel::Comm;
 use crate::{ErrorKind, Result};
@@ -278,7 +278,7 @@ fn reform(
     match problem.jacobian(comm, u, k) {
         Ok(()) => {}
         Err(e) if e.kind == ErrorKind::Convergence => {
-            st.reason = e.message;
+            st.fail(Failure::Element, e.message);
             st.seconds_assembly += t1.elapsed().as_secs_f64();
             return Ok(false);
         }
@@ -303,7 +303,7 @@ fn reform(
         match res {
             Ok(f) => st.factorizations += f as usize,
             Err(e) => {
-                st.reason = e;
+                st.fail(Failure::LinearSolver, e);
                 return Ok(false);
             }
         }
@@ -354,8 +354,8 @@ fn run(
                 st.converged = true;
                 return Ok(st);
             }
-            Verdict::Fail(why) => {
-                st.reason = why;
+            Verdict::Fail(kind, why) => {
+                st.fail(kind, why);
                 return Ok(st);
             }
             Verdict::Continue => {}

@@ -3,7 +3,7 @@
 //! backtracking line search on ‖r_free‖.
 
 use super::Preconditioning;
-use super::{NonlinearOptions, NonlinearProblem, SolveStats};
+use super::{Failure, NonlinearOptions, NonlinearProblem, SolveStats};
 use crate::linalg::gmres::{gmres, GmresOptions, GmresStats};
 use crate::linalg::LinearOperator;
 use crate::parallel::Comm;
@@ -84,7 +84,7 @@ pub fn evaluate(
     let f_ref = match problem.residual(comm, u, r) {
         Ok(f) => f,
         Err(e) if e.kind == ErrorKind::Convergence => {
-            st.reason = e.message;
+            st.fail(Failure::Element, e.message);
             st.seconds_assembly += t0.elapsed().as_secs_f64();
             return Ok(None);
         }
@@ -115,7 +115,7 @@ pub fn evaluate(
 pub enum Verdict {
     Converged,
     Continue,
-    Fail(String),
+    Fail(Failure, String),
 }
 
 /// Iterations over which the residual must fall by 10% before a solve is stagnating:
@@ -188,7 +188,7 @@ impl Monitor {
         // Overflow (a load of 1e200, a modulus of 1e300) is a failure, never convergence:
         // an infinite reference force would pass any relative test.
         if !(ev.rn.is_finite() && ev.f_ref.is_finite() && ev.un.is_finite()) {
-            return Verdict::Fail(format!(
+            return Verdict::Fail(Failure::NonFinite, format!(
                 "the residual is not finite (|r| = {:.3e}, reference force {:.3e}, |u| = {:.3e}): a load or material constant overflows",
                 ev.rn, ev.f_ref, ev.un
             ));
@@ -215,17 +215,23 @@ impl Monitor {
         }
         let scale = self.divergence_scale.unwrap_or(0.0);
         if it > 0 && scale > 0.0 && ev.rn > DIVERGENCE_FACTOR * scale {
-            return Verdict::Fail(format!(
-                "diverged: residual grew to {:.3e} (force scale {scale:.3e})",
-                ev.rn
-            ));
+            return Verdict::Fail(
+                Failure::Diverged,
+                format!(
+                    "diverged: residual grew to {:.3e} (force scale {scale:.3e})",
+                    ev.rn
+                ),
+            );
         }
         if it >= opts.max_iterations {
-            return Verdict::Fail(format!(
-                "no convergence in {} iterations (relative residual {:.3e})",
-                opts.max_iterations,
-                ev.relative()
-            ));
+            return Verdict::Fail(
+                Failure::IterationLimit,
+                format!(
+                    "no convergence in {} iterations (relative residual {:.3e})",
+                    opts.max_iterations,
+                    ev.relative()
+                ),
+            );
         }
         // Stagnation, counted from the first point without a pending prescribed increment.
         let window = STAGNATION_WINDOW.max(opts.max_iterations / 2);
@@ -234,7 +240,7 @@ impl Monitor {
                 self.best = ev.rn;
                 self.best_at = it;
             } else if self.best.is_finite() && it >= self.best_at + window && !small_r {
-                return Verdict::Fail(format!(
+                return Verdict::Fail(Failure::Stagnated, format!(
                     "stagnated: the residual did not fall by 10% in {window} iterations (relative residual {:.3e})",
                     ev.relative()
                 ));
@@ -278,7 +284,7 @@ pub fn precond_solve(
                     st.factorizations += f as usize;
                 }
                 Err(e) => {
-                    st.reason = e;
+                    st.fail(Failure::LinearSolver, e);
                     break None;
                 }
             }
@@ -295,10 +301,13 @@ pub fn precond_solve(
             break Some(gs);
         }
         if fresh || !factored {
-            st.reason = format!(
-                "GMRES did not converge in {} iterations (relative residual {:.3e})",
-                gs.iterations,
-                gs.residual_norm / gs.rhs_norm.max(f64::MIN_POSITIVE)
+            st.fail(
+                Failure::LinearSolver,
+                format!(
+                    "GMRES did not converge in {} iterations (relative residual {:.3e})",
+                    gs.iterations,
+                    gs.residual_norm / gs.rhs_norm.max(f64::MIN_POSITIVE)
+                ),
             );
             break None;
         }
@@ -473,7 +482,10 @@ mod tests {
                 un: 0.0,
             };
             match Monitor::default().verdict(&e, 0, 1.0, &o) {
-                Verdict::Fail(why) => assert!(why.contains("not finite"), "{why}"),
+                Verdict::Fail(kind, why) => {
+                    assert!(why.contains("not finite"), "{why}");
+                    assert_eq!(kind, Failure::NonFinite);
+                }
                 _ => panic!("{rn} / {f_ref} must fail"),
             }
         }
@@ -490,7 +502,7 @@ mod tests {
         }
         let first_fail = verdicts
             .iter()
-            .position(|v| matches!(v, Verdict::Fail(_)))
+            .position(|v| matches!(v, Verdict::Fail(Failure::Stagnated, _)))
             .unwrap();
         assert_eq!(
             first_fail, 12,
@@ -498,11 +510,11 @@ mod tests {
         );
         let mut m = Monitor::default();
         assert!(
-            matches!(m.verdict(&ev(1e9), 1, 1.0, &o), Verdict::Fail(w) if w.contains("diverged"))
+            matches!(m.verdict(&ev(1e9), 1, 1.0, &o), Verdict::Fail(Failure::Diverged, w) if w.contains("diverged"))
         );
         assert!(matches!(
             m.verdict(&ev(f64::NAN), 1, 1.0, &o),
-            Verdict::Fail(_)
+            Verdict::Fail(Failure::NonFinite, _)
         ));
     }
 }

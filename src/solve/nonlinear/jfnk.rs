@@ -17,7 +17,7 @@
 
 use super::common::{evaluate, take_step, Constraints, Eval, Monitor, Verdict};
 use super::Preconditioning;
-use super::{FdRule, NonlinearOptions, NonlinearProblem, SolveStats};
+use super::{Failure, FdRule, NonlinearOptions, NonlinearProblem, SolveStats};
 use crate::linalg::gmres::{gmres, GmresOptions};
 use crate::linalg::matrix::DistMatrix;
 use crate::linalg::LinearOperator;
@@ -144,7 +144,7 @@ fn refresh_preconditioner(
     match problem.jacobian(comm, u, k) {
         Ok(()) => {}
         Err(e) if e.kind == ErrorKind::Convergence => {
-            st.reason = e.message;
+            st.fail(Failure::Element, e.message);
             return Ok(false);
         }
         Err(e) => return Err(e),
@@ -163,7 +163,7 @@ fn refresh_preconditioner(
             true
         }
         Err(e) => {
-            st.reason = e;
+            st.fail(Failure::LinearSolver, e);
             false
         }
     };
@@ -211,8 +211,8 @@ pub fn jfnk(
                 st.converged = true;
                 return Ok(st);
             }
-            Verdict::Fail(why) => {
-                st.reason = why;
+            Verdict::Fail(kind, why) => {
+                st.fail(kind, why);
                 return Ok(st);
             }
             Verdict::Continue => {}
@@ -355,10 +355,13 @@ fn direction(
                 }
                 continue;
             }
-            st.reason = format!(
-                "GMRES did not converge in {} iterations (relative residual {:.3e}, forcing term {eta:.1e})",
-                gs.iterations,
-                gs.residual_norm / gs.rhs_norm.max(f64::MIN_POSITIVE)
+            st.fail(
+                Failure::LinearSolver,
+                format!(
+                    "GMRES did not converge in {} iterations (relative residual {:.3e}, forcing term {eta:.1e})",
+                    gs.iterations,
+                    gs.residual_norm / gs.rhs_norm.max(f64::MIN_POSITIVE)
+                ),
             );
         }
         Ok(None)
@@ -370,7 +373,10 @@ fn direction(
     st.residual_evaluations += op.products;
     match res {
         Err(e) if e.kind == ErrorKind::Convergence => {
-            st.reason = format!("a finite-difference product failed: {}", e.message);
+            st.fail(
+                Failure::Element,
+                format!("a finite-difference product failed: {}", e.message),
+            );
             Ok(None)
         }
         other => other,

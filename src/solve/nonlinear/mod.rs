@@ -140,6 +140,46 @@ pub trait NonlinearProblem {
     fn jacobian(&mut self, comm: &dyn Comm, u: &[f64], k: &mut DistMatrix) -> Result<()>;
 }
 
+/// Why a nonlinear solve (or a run) failed: the kind the step controller, the log and
+/// `summary.json` (`failure_reason`) report beside the message (PETSc's
+/// `SNESConvergedReason`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Failure {
+    /// The residual or the state overflowed.
+    NonFinite,
+    /// The residual grew past its divergence bound.
+    Diverged,
+    /// The residual did not fall by 10 % over the stagnation window.
+    Stagnated,
+    /// The iteration budget ran out.
+    IterationLimit,
+    /// An element could not be evaluated: inverted, or its material failed.
+    Element,
+    /// A factorization or a Krylov solve failed.
+    LinearSolver,
+    /// Tracked nodes kept switching between stick and slip (`diagnose`).
+    StickSlipCycling,
+    /// Explicit dynamics: the stable time step collapsed or fell below a fixed one.
+    TimeStep,
+}
+
+impl Failure {
+    /// The name `summary.json` and the log use.
+    pub fn name(self) -> &'static str {
+        match self {
+            Failure::NonFinite => "non-finite",
+            Failure::Diverged => "diverged",
+            Failure::Stagnated => "stagnated",
+            Failure::IterationLimit => "iteration-limit",
+            Failure::Element => "element",
+            Failure::LinearSolver => "linear-solver",
+            Failure::StickSlipCycling => "stick-slip-cycling",
+            Failure::TimeStep => "time-step",
+        }
+    }
+}
+
 /// Statistics of one nonlinear solve (one load step attempt).
 #[derive(Debug, Clone, Default, serde::Serialize)]
 pub struct SolveStats {
@@ -153,6 +193,8 @@ pub struct SolveStats {
     pub residual_history: Vec<f64>,
     /// Why it stopped when it did not converge.
     pub reason: String,
+    /// The kind of that reason.
+    pub failure: Option<Failure>,
     pub seconds_assembly: f64,
     pub seconds_linear: f64,
     /// Of `seconds_linear`, the preconditioner's setups (factorizations, coarse spaces).
@@ -161,4 +203,12 @@ pub struct SolveStats {
     pub coarse: Option<crate::linalg::CoarseStats>,
     /// Linear-operator applications that were finite-difference residuals (JFNK).
     pub fd_products: usize,
+}
+
+impl SolveStats {
+    /// Record a failure of kind `kind` with its message.
+    pub fn fail(&mut self, kind: Failure, reason: String) {
+        self.failure = Some(kind);
+        self.reason = reason;
+    }
 }

@@ -9,7 +9,7 @@
 
 use super::common::{evaluate, precond_solve, take_step, Constraints, Monitor, Verdict};
 use super::Preconditioning;
-use super::{NonlinearOptions, NonlinearProblem, SolveStats};
+use super::{Failure, NonlinearOptions, NonlinearProblem, SolveStats};
 use crate::linalg::matrix::DistMatrix;
 use crate::parallel::Comm;
 use crate::{ErrorKind, Result};
@@ -50,8 +50,8 @@ pub fn newton(
                 st.converged = true;
                 return Ok(st);
             }
-            Verdict::Fail(why) => {
-                st.reason = why;
+            Verdict::Fail(kind, why) => {
+                st.fail(kind, why);
                 return Ok(st);
             }
             Verdict::Continue => {}
@@ -61,7 +61,7 @@ pub fn newton(
         match problem.jacobian(comm, u, k) {
             Ok(()) => {}
             Err(e) if e.kind == ErrorKind::Convergence => {
-                st.reason = e.message;
+                st.fail(Failure::Element, e.message);
                 return Ok(st);
             }
             Err(e) => return Err(e),

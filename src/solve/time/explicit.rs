@@ -139,6 +139,7 @@ pub fn run_explicit(
             if !fixed {
                 dt = factor * now;
             } else if dt > now {
+                tot.failure_reason = Some(crate::solve::nonlinear::Failure::TimeStep);
                 tot.failure = Some(format!(
                     "step {} (t = {t}): the fixed analysis.step {dt:.4e} is above the stable step {now:.4e} of the deformed mesh",
                     step + 1
@@ -146,6 +147,7 @@ pub fn run_explicit(
                 return Ok(tot);
             }
             if dt.is_nan() || dt <= 1e-12 * end {
+                tot.failure_reason = Some(crate::solve::nonlinear::Failure::TimeStep);
                 tot.failure = Some(format!(
                     "step {} (t = {t}): the stable step collapsed to {dt:.3e} (an element is squashed flat)",
                     step + 1
@@ -177,6 +179,7 @@ pub fn run_explicit(
         let ta = Instant::now();
         if let Err(e) = model.forces(comm, &state.u, t1, &mut fi, &mut fe) {
             tot.seconds_assembly += ta.elapsed().as_secs_f64();
+            tot.failure_reason = Some(crate::solve::nonlinear::Failure::Element);
             tot.failure = Some(format!("step {} (t = {t1}): {}", step + 1, e.message));
             return Ok(tot);
         }

@@ -212,10 +212,12 @@ pub fn run_implicit(
             let mut stats = stats;
             if let Some(why) = model.diagnose(comm) {
                 stats.reason = format!("{}; {why}", stats.reason);
+                stats.failure = Some(crate::solve::nonlinear::Failure::StickSlipCycling);
             }
             model.after_failed_attempt();
             pc.invalidate();
             let reason = stats.reason.clone();
+            let kind = stats.failure;
             pending.push(Attempt {
                 t_start: t_done,
                 t_end: t1,
@@ -223,6 +225,7 @@ pub fn run_implicit(
             });
             if let Err(why) = ctl.reject(t1, &reason, "time step") {
                 tot.failure = Some(why);
+                tot.failure_reason = kind;
                 tot.failed_last = pending;
                 return Ok(tot);
             }

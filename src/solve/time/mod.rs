@@ -14,7 +14,8 @@ pub mod implicit;
 use crate::model::dynamics::MassMatrix;
 use crate::model::Model;
 use crate::parallel::Comm;
-use crate::solve::stepping::StepRecord;
+pub use crate::solve::record::DynResume;
+use crate::solve::record::{Flow, Resume, StepRecord};
 use crate::Result;
 
 /// The state at a step: displacement, velocity, acceleration on owned dofs.
@@ -25,26 +26,10 @@ pub struct DynState {
     pub a: Vec<f64>,
 }
 
-/// What implicit dynamics needs to resume after a step besides the solution: velocity,
-/// acceleration, the last residual (the force-averaged schemes use it) and the energy
-/// account.
-#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
-pub struct DynResume {
-    pub v: Vec<f64>,
-    pub a: Vec<f64>,
-    pub r_old: Vec<f64>,
-    pub energy: energy::EnergyAccount,
-}
-
 /// Called with every step (the initial state as step 0), its state, the model and how
 /// to resume after it (built only when asked for; explicit runs cannot be resumed).
-pub type DynObserver<'a> = dyn FnMut(
-        &StepRecord,
-        &DynState,
-        &Model,
-        Option<&dyn Fn() -> crate::solve::stepping::Resume>,
-    ) -> Result<crate::solve::stepping::Flow>
-    + 'a;
+pub type DynObserver<'a> =
+    dyn FnMut(&StepRecord, &DynState, &Model, Option<&dyn Fn() -> Resume>) -> Result<Flow> + 'a;
 
 /// Velocity and acceleration of the prescribed dofs at t by central differences of
 /// the prescribed displacement with spacing h: (dof, g, ġ, g̈).
@@ -90,48 +75,4 @@ pub fn momentum(comm: &dyn Comm, model: &Model, mass: &MassMatrix, v: &[f64]) ->
     let mut mv = vec![0.0; v.len()];
     model.apply_mass(comm, mass, v, &mut mv);
     mv
-}
-
-/// Whether a dynamic step at time t writes fields: at every multiple of `interval`
-/// (the first step at or after it), the initial state and the last step.
-#[derive(Debug, Clone)]
-pub struct OutputClock {
-    interval: f64,
-    next: f64,
-    end: f64,
-}
-
-impl OutputClock {
-    pub fn new(interval: f64, end: f64) -> Self {
-        Self {
-            interval,
-            next: 0.0,
-            end,
-        }
-    }
-    /// A restart at t: the next output is the first multiple of the interval after it.
-    pub fn skip_to(&mut self, t: f64) {
-        self.next = ((t / self.interval + 1e-9).floor() + 1.0) * self.interval;
-    }
-
-    pub fn due(&mut self, t: f64) -> bool {
-        let last = t >= self.end * (1.0 - 1e-12);
-        if t >= self.next - 1e-9 * self.interval || last {
-            self.next = ((t / self.interval + 1e-9).floor() + 1.0) * self.interval;
-            return true;
-        }
-        false
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    #[test]
-    fn output_clock_hits_each_interval_once() {
-        let mut c = super::OutputClock::new(0.25, 1.0);
-        let times: Vec<f64> = (0..=20).map(|i| i as f64 * 0.05).collect();
-        let hits: Vec<f64> = times.into_iter().filter(|&t| c.due(t)).collect();
-        assert_eq!(hits.len(), 5, "{hits:?}");
-        assert!((hits[1] - 0.25).abs() < 1e-12 && (hits[4] - 1.0).abs() < 1e-12);
-    }
 }

@@ -2,10 +2,19 @@
 //! (`deny_unknown_fields` everywhere) and every error names its field path, e.g.
 //! `parts[0].mesh.cells: invalid length 2, expected an array of length 3`.
 
+pub mod coupling;
+pub mod pairs;
+pub mod steps;
+pub mod walls;
+
 pub use crate::linalg::PcKind;
 pub use crate::solve::nonlinear::{FdRule, SolverKind};
 pub use crate::solve::{AnalysisKind, MassKind, Predictor, Scheme};
+pub use coupling::{Amount, Components, CouplingDeck, WeightsDeck};
+pub use pairs::{BoltDeck, LockAt, PairsDeck, Weights};
 use serde::{Deserialize, Serialize};
+pub use steps::StepDeck;
+pub use walls::{DofDeck, DofType, SegmentDeck, ShapeKind, TraceDeck, WallDeck, WallMotionDeck};
 
 #[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
@@ -28,7 +37,7 @@ pub struct Deck {
     /// Analysis steps in sequence (Abaqus `*STEP`): loads, motions and bolts may name
     /// one (see `scene::steps`).
     #[serde(default)]
-    pub steps: Vec<super::steps::StepDeck>,
+    pub steps: Vec<StepDeck>,
     #[serde(default)]
     pub solver: SolverDeck,
     #[serde(default)]
@@ -42,20 +51,20 @@ pub struct Deck {
     pub quantities: Vec<QuantityDeck>,
     /// Rigid walls (contact, DESIGN.md "Contact kinds").
     #[serde(default)]
-    pub walls: Vec<super::walls::WallDeck>,
+    pub walls: Vec<WallDeck>,
     /// Contact entities: rigid bodies with analytical shapes whose DOFs are prescribed or
     /// free (the paper's §3.5–3.6); the same table as a wall.
     #[serde(default)]
-    pub entities: Vec<super::walls::WallDeck>,
+    pub entities: Vec<WallDeck>,
     /// Distributing couplings (a reference point tied to nodes, RBE3).
     #[serde(default)]
-    pub couplings: Vec<super::coupling::CouplingDeck>,
+    pub couplings: Vec<CouplingDeck>,
     /// Small-sliding contact between deformable parts (the paper's §3.7).
     #[serde(default)]
-    pub pairs: Vec<super::pairs::PairsDeck>,
+    pub pairs: Vec<PairsDeck>,
     /// Bolt pretension sections (tied across a cut, pretensioned, then locked).
     #[serde(default)]
-    pub bolts: Vec<super::pairs::BoltDeck>,
+    pub bolts: Vec<BoltDeck>,
     /// How the elements are split over ranks (default METIS).
     #[serde(default)]
     pub partition: Option<PartitionDeck>,

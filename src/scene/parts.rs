@@ -1,0 +1,765 @@
+//! `[[materials]]` and `[[parts]]`: each part's material, element formulation and mesh
+//! (generated, or read from a file), placed and checked element by element.
+
+use super::check::err;
+use super::deck::*;
+use crate::fem::element::{check_reference, Formulation};
+use crate::material::Hardening;
+use crate::mesh::cylinder::{cylinder_mesh, ring_mesh, CylinderSpec, RingSpec};
+use crate::mesh::generate::{box_mesh, distort_interior, BoxSpec};
+use crate::mesh::{gmsh, ElemKind, Mesh};
+use crate::model::def::*;
+use crate::Result;
+use std::collections::BTreeSet;
+use std::path::Path;
+
+/// The parts' meshes appended into one, with each part's material, formulation and nodes.
+pub(super) struct Parts {
+    pub mesh: Mesh,
+    /// Index into the materials, per part.
+    pub material: Vec<usize>,
+    pub formulation: Vec<Formulation>,
+    /// The nodes of each part in the appended mesh.
+    pub nodes: Vec<BTreeSet<usize>>,
+}
+
+/// Every `[[materials]]` entry checked and resolved, in deck order.
+pub(super) fn materials(deck: &Deck) -> Result<Vec<(String, MaterialDef)>> {
+    let mut materials = Vec::new();
+    for (i, m) in deck.materials.iter().enumerate() {
+        materials.push((
+            m.name.clone(),
+            material_def(m, &format!("materials[{i}]"), deck)?,
+        ));
+    }
+    Ok(materials)
+}
+
+/// Every `[[parts]]` entry: its material, formulation and mesh, placed, every element
+/// valid in the reference configuration; the meshes appended in deck order.
+pub(super) fn parts(
+    deck: &Deck,
+    materials: &[(String, MaterialDef)],
+    deck_dir: &Path,
+) -> Result<Parts> {
+    if deck.parts.is_empty() {
+        return Err(err("parts", "expected at least one [[parts]] entry"));
+    }
+    let mut out = Parts {
+        mesh: Mesh::default(),
+        material: Vec::new(),
+        formulation: Vec::new(),
+        nodes: Vec::new(),
+    };
+    for (pi, p) in deck.parts.iter().enumerate() {
+        let f = format!("parts[{pi}]");
+        let Some(mi) = materials.iter().position(|(n, _)| *n == p.material) else {
+            let names: Vec<&str> = materials.iter().map(|(n, _)| n.as_str()).collect();
+            return Err(err(
+                format!("{f}.material"),
+                format!(
+                    "unknown material `{}` (defined: {})",
+                    p.material,
+                    if names.is_empty() {
+                        "none".into()
+                    } else {
+                        names.join(", ")
+                    }
+                ),
+            ));
+        };
+        out.material.push(mi);
+        let explicit = deck.analysis.kind == AnalysisKind::Explicit;
+        out.formulation
+            .push(part_formulation_of(p, &materials[mi].1, &f, explicit)?);
+        let mut pm = part_mesh(&p.mesh, &f, pi as u32, deck_dir)?;
+        place(&mut pm, p, &f)?;
+        check_elements(&pm, &f, &p.name)?;
+        let n0 = out.mesh.n_nodes();
+        out.nodes.push((n0..n0 + pm.n_nodes()).collect());
+        out.mesh.append(&pm);
+    }
+    Ok(out)
+}
+
+/// Reference-configuration validity of every element of a part's mesh.
+fn check_elements(pm: &Mesh, f: &str, name: &str) -> Result<()> {
+    for e in 0..pm.n_elems() {
+        let x0: Vec<[f64; 3]> = pm.elem_nodes(e).iter().map(|&n| pm.coords[n]).collect();
+        if let Err(why) = check_reference(pm.kinds[e], &x0) {
+            return Err(err(
+                format!("{f} `{name}`"),
+                format!(
+                    "element {e} ({}) is inverted or degenerate: {why}",
+                    pm.kinds[e].name()
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// The most elements a generated part may have (2e7: tens of GB before solving).
+const MAX_ELEMENTS: f64 = 2e7;
+
+/// Refuse a generated mesh of more than [`MAX_ELEMENTS`] before allocating it.
+fn size_guard(field: &str, elements: f64) -> Result<()> {
+    if elements > MAX_ELEMENTS {
+        return Err(err(
+            field,
+            format!("makes {elements:.3e} elements; expected at most {MAX_ELEMENTS:.0e}"),
+        ));
+    }
+    Ok(())
+}
+
+/// Rotate (Rodrigues) and translate a part's mesh as its deck says.
+fn place(mesh: &mut Mesh, p: &PartDeck, f: &str) -> Result<()> {
+    if let Some(r) = &p.rotate {
+        let n = (r.axis.iter().map(|a| a * a).sum::<f64>()).sqrt();
+        if !(n > 0.0 && n.is_finite()) {
+            return Err(err(
+                format!("{f}.rotate.axis"),
+                format!("expected a non-zero finite vector, got {:?}", r.axis),
+            ));
+        }
+        if !r.angle.is_finite() {
+            return Err(err(
+                format!("{f}.rotate.angle"),
+                format!("expected a finite angle in degrees, got {}", r.angle),
+            ));
+        }
+        let k = r.axis.map(|a| a / n);
+        let (s, c) = r.angle.to_radians().sin_cos();
+        for x in mesh.coords.iter_mut() {
+            let kx = [
+                k[1] * x[2] - k[2] * x[1],
+                k[2] * x[0] - k[0] * x[2],
+                k[0] * x[1] - k[1] * x[0],
+            ];
+            let kd = k[0] * x[0] + k[1] * x[1] + k[2] * x[2];
+            *x = [0, 1, 2].map(|i| x[i] * c + kx[i] * s + k[i] * kd * (1.0 - c));
+        }
+    }
+    if let Some(t) = p.translate {
+        if t.iter().any(|v| !v.is_finite()) {
+            return Err(err(
+                format!("{f}.translate"),
+                format!("expected a finite vector, got {t:?}"),
+            ));
+        }
+        for x in mesh.coords.iter_mut() {
+            *x = [0, 1, 2].map(|i| x[i] + t[i]);
+        }
+    }
+    Ok(())
+}
+
+/// A part's mesh as its deck entry says: generated, or read from a file.
+fn part_mesh(m: &MeshDeck, f: &str, part: u32, deck_dir: &Path) -> Result<Mesh> {
+    match m {
+        MeshDeck::Box { .. } => box_part(m, f, part),
+        MeshDeck::ExtrudedQuad { .. } => extruded_quad_part(m, f, part),
+        MeshDeck::Cylinder { .. } => cylinder_part(m, f, part),
+        MeshDeck::Ring { .. } => ring_part(m, f, part),
+        MeshDeck::Blocks { .. } => blocks_part(m, f, part),
+        MeshDeck::Sheet { .. } => sheet_part(m, f, part, deck_dir),
+        MeshDeck::Gmsh { .. } => gmsh_part(m, f, part, deck_dir),
+    }
+}
+
+/// A `Box` part mesh (see [`part_mesh`]).
+fn box_part(m: &MeshDeck, f: &str, part: u32) -> Result<Mesh> {
+    let MeshDeck::Box {
+        origin,
+        size,
+        cells,
+        grading,
+        element,
+        distort,
+    } = m
+    else {
+        unreachable!("called on Box meshes only")
+    };
+    if origin.iter().any(|o| !o.is_finite()) {
+        return Err(err(
+            format!("{f}.mesh.origin"),
+            format!("expected three finite coordinates, got {origin:?}"),
+        ));
+    }
+    if size.iter().any(|&s| !(s > 0.0 && s.is_finite())) {
+        return Err(err(
+            format!("{f}.mesh.size"),
+            format!("expected three positive lengths, got {size:?}"),
+        ));
+    }
+    if cells.contains(&0) {
+        return Err(err(
+            format!("{f}.mesh.cells"),
+            format!("expected three counts ≥ 1, got {cells:?}"),
+        ));
+    }
+    size_guard(
+        &format!("{f}.mesh.cells"),
+        cells.iter().map(|&c| c as f64).product(),
+    )?;
+    if grading.iter().any(|&g| !(g > 0.0 && g.is_finite())) {
+        return Err(err(
+            format!("{f}.mesh.grading"),
+            format!("expected positive ratios, got {grading:?}"),
+        ));
+    }
+    if !(0.0..=0.3).contains(distort) {
+        return Err(err(
+            format!("{f}.mesh.distort"),
+            format!("expected 0 ≤ distort ≤ 0.3, got {distort}"),
+        ));
+    }
+    let kind = match element {
+        ElementDeck::Hex8 => ElemKind::Hex8,
+        ElementDeck::Tet4 => ElemKind::Tet4,
+    };
+    let spec = BoxSpec {
+        origin: *origin,
+        size: *size,
+        cells: *cells,
+        grading: *grading,
+        kind,
+    };
+    let mut mesh = box_mesh(&spec, part);
+    if *distort > 0.0 {
+        distort_interior(&mut mesh, *distort, 12345);
+    }
+    Ok(mesh)
+}
+
+/// A `ExtrudedQuad` part mesh (see [`part_mesh`]).
+fn extruded_quad_part(m: &MeshDeck, f: &str, part: u32) -> Result<Mesh> {
+    let MeshDeck::ExtrudedQuad {
+        corners,
+        z0,
+        thickness,
+        cells,
+        element,
+    } = m
+    else {
+        unreachable!("called on ExtrudedQuad meshes only")
+    };
+    if !(*thickness > 0.0 && thickness.is_finite()) {
+        return Err(err(
+            format!("{f}.mesh.thickness"),
+            format!("expected a positive length, got {thickness}"),
+        ));
+    }
+    if cells.contains(&0) {
+        return Err(err(
+            format!("{f}.mesh.cells"),
+            format!("expected three counts ≥ 1, got {cells:?}"),
+        ));
+    }
+    size_guard(
+        &format!("{f}.mesh.cells"),
+        cells.iter().map(|&c| c as f64).product(),
+    )?;
+    // Convex and counter-clockwise: every corner turns left.
+    for i in 0..4 {
+        let (a, b, c) = (corners[i], corners[(i + 1) % 4], corners[(i + 2) % 4]);
+        let cross = (b[0] - a[0]) * (c[1] - b[1]) - (b[1] - a[1]) * (c[0] - b[0]);
+        if cross.is_nan() || cross <= 0.0 {
+            return Err(err(
+                format!("{f}.mesh.corners"),
+                "expected a convex quadrilateral, corners counter-clockwise",
+            ));
+        }
+    }
+    let kind = match element {
+        ElementDeck::Hex8 => ElemKind::Hex8,
+        ElementDeck::Tet4 => ElemKind::Tet4,
+    };
+    let spec = BoxSpec {
+        origin: [0.0, 0.0, *z0],
+        size: [1.0, 1.0, *thickness],
+        cells: *cells,
+        grading: [1.0; 3],
+        kind,
+    };
+    let mut mesh = box_mesh(&spec, part);
+    // Bilinear map: corners 0..3 at (ξ, η) = (0,0), (1,0), (1,1), (0,1).
+    for x in &mut mesh.coords {
+        let (s, t) = (x[0], x[1]);
+        let w = [(1.0 - s) * (1.0 - t), s * (1.0 - t), s * t, (1.0 - s) * t];
+        x[0] = (0..4).map(|i| w[i] * corners[i][0]).sum();
+        x[1] = (0..4).map(|i| w[i] * corners[i][1]).sum();
+    }
+    Ok(mesh)
+}
+
+/// A `Cylinder` part mesh (see [`part_mesh`]).
+fn cylinder_part(m: &MeshDeck, f: &str, part: u32) -> Result<Mesh> {
+    let MeshDeck::Cylinder {
+        radius,
+        length,
+        z0,
+        cells_radial,
+        cells_axial,
+        axial_grading,
+        sector,
+    } = m
+    else {
+        unreachable!("called on Cylinder meshes only")
+    };
+    let spec = CylinderSpec {
+        radius: *radius,
+        length: *length,
+        z0: *z0,
+        cells_radial: *cells_radial,
+        cells_axial: *cells_axial,
+        axial_grading: *axial_grading,
+        quarter: *sector == SectorDeck::Quarter,
+    };
+    spec.check()
+        .map_err(|(field, why)| err(format!("{f}.mesh.{field}"), why))?;
+    // The butterfly section has about 3 cells_radial² cells.
+    let section = 3.0 * (*cells_radial as f64).powi(2);
+    size_guard(&format!("{f}.mesh.cells_radial"), section)?;
+    size_guard(
+        &format!("{f}.mesh.cells_axial"),
+        section * *cells_axial as f64,
+    )?;
+    Ok(cylinder_mesh(&spec, part))
+}
+
+/// A `Ring` part mesh (see [`part_mesh`]).
+fn ring_part(m: &MeshDeck, f: &str, part: u32) -> Result<Mesh> {
+    let MeshDeck::Ring {
+        inner_radius,
+        outer_radius,
+        thickness,
+        z0,
+        angles,
+        cells,
+        center,
+    } = m
+    else {
+        unreachable!("called on Ring meshes only")
+    };
+    let spec = RingSpec {
+        inner_radius: *inner_radius,
+        outer_radius: *outer_radius,
+        thickness: *thickness,
+        z0: *z0,
+        angles: *angles,
+        cells: *cells,
+        center: *center,
+    };
+    spec.check()
+        .map_err(|(field, why)| err(format!("{f}.mesh.{field}"), why))?;
+    size_guard(
+        &format!("{f}.mesh.cells"),
+        cells.iter().map(|&c| c as f64).product(),
+    )?;
+    Ok(ring_mesh(&spec, part))
+}
+
+/// A `Blocks` part mesh (see [`part_mesh`]).
+fn blocks_part(m: &MeshDeck, f: &str, part: u32) -> Result<Mesh> {
+    let MeshDeck::Blocks {
+        solids,
+        holes,
+        cell_size,
+        refine,
+    } = m
+    else {
+        unreachable!("called on Blocks meshes only")
+    };
+    if solids.is_empty() {
+        return Err(err(format!("{f}.mesh.solids"), "expected at least one box"));
+    }
+    for (what, list) in [("solids", solids), ("holes", holes)] {
+        for (i, b) in list.iter().enumerate() {
+            if (0..3).any(|a| !(b[0][a] < b[1][a] && b[0][a].is_finite() && b[1][a].is_finite())) {
+                return Err(err(
+                    format!("{f}.mesh.{what}[{i}]"),
+                    format!("expected [[min x, y, z], [max x, y, z]] with min < max, got {b:?}"),
+                ));
+            }
+        }
+    }
+    if !(*cell_size > 0.0 && cell_size.is_finite()) {
+        return Err(err(
+            format!("{f}.mesh.cell_size"),
+            format!("expected a positive length, got {cell_size}"),
+        ));
+    }
+    for (i, r) in refine.iter().enumerate() {
+        if !(r.from < r.to && r.from.is_finite() && r.to.is_finite()) {
+            return Err(err(
+                format!("{f}.mesh.refine[{i}]"),
+                format!(
+                    "expected finite from < to, got from = {}, to = {}",
+                    r.from, r.to
+                ),
+            ));
+        }
+        if !(r.cell_size > 0.0 && r.cell_size.is_finite()) {
+            return Err(err(
+                format!("{f}.mesh.refine[{i}].cell_size"),
+                format!("expected a positive length, got {}", r.cell_size),
+            ));
+        }
+    }
+    let spec = crate::mesh::blocks::BlocksSpec {
+        solids: solids.clone(),
+        holes: holes.clone(),
+        cell_size: *cell_size,
+        refine: refine
+            .iter()
+            .map(|r| crate::mesh::blocks::Slab {
+                axis: r.axis as usize,
+                range: [r.from, r.to],
+                cell_size: r.cell_size,
+            })
+            .collect(),
+    };
+    let n = crate::mesh::blocks::lattice_cells(&spec);
+    if n > MAX_ELEMENTS {
+        return Err(err(
+            format!("{f}.mesh.cell_size"),
+            format!(
+                "{cell_size} makes a lattice of {n:.3e} cells; expected at most {MAX_ELEMENTS:.0e}"
+            ),
+        ));
+    }
+    let mesh = crate::mesh::blocks::blocks_mesh(&spec, part);
+    if mesh.n_elems() == 0 {
+        return Err(err(
+            format!("{f}.mesh.solids"),
+            "no cell lies in a solid and outside every hole",
+        ));
+    }
+    Ok(mesh)
+}
+
+/// A `Sheet` part mesh (see [`part_mesh`]).
+fn sheet_part(m: &MeshDeck, f: &str, part: u32, deck_dir: &Path) -> Result<Mesh> {
+    let MeshDeck::Sheet {
+        file,
+        thickness,
+        layers,
+        offset,
+    } = m
+    else {
+        unreachable!("called on Sheet meshes only")
+    };
+    if !(*thickness > 0.0 && thickness.is_finite()) {
+        return Err(err(
+            format!("{f}.mesh.thickness"),
+            format!("expected a positive length, got {thickness}"),
+        ));
+    }
+    if !(1..=64).contains(layers) {
+        return Err(err(
+            format!("{f}.mesh.layers"),
+            format!("expected 1 to 64 elements through the thickness, got {layers}"),
+        ));
+    }
+    let (path, text) = read_mesh_file(file, f, deck_dir)?;
+    let in_file = |e: String| {
+        err(
+            format!("{f}.mesh.file"),
+            format!("`{}`: {e}", path.display()),
+        )
+    };
+    let surface = gmsh::read_surface(&text).map_err(in_file)?;
+    let spec = crate::mesh::sheet::SheetSpec {
+        thickness: *thickness,
+        layers: *layers,
+        offset: match offset {
+            SheetOffsetDeck::Middle => crate::mesh::sheet::Offset::Middle,
+            SheetOffsetDeck::AlongNormal => crate::mesh::sheet::Offset::AlongNormal,
+            SheetOffsetDeck::AgainstNormal => crate::mesh::sheet::Offset::AgainstNormal,
+        },
+    };
+    crate::mesh::sheet::extrude(&surface, &spec, part).map_err(in_file)
+}
+
+/// A `Gmsh` part mesh (see [`part_mesh`]).
+fn gmsh_part(m: &MeshDeck, f: &str, part: u32, deck_dir: &Path) -> Result<Mesh> {
+    let MeshDeck::Gmsh { file } = m else {
+        unreachable!("called on Gmsh meshes only")
+    };
+    let (path, text) = read_mesh_file(file, f, deck_dir)?;
+    let mut mesh = gmsh::read_msh(&text, part).map_err(|e| {
+        err(
+            format!("{f}.mesh.file"),
+            format!("`{}`: {e}", path.display()),
+        )
+    })?;
+    compact_unused_nodes(&mut mesh);
+    if mesh.n_elems() == 0 {
+        return Err(err(
+            format!("{f}.mesh.file"),
+            format!("`{}` has no hex8 or tet4 elements", path.display()),
+        ));
+    }
+    Ok(mesh)
+}
+
+/// A mesh file's path (relative to the deck's directory) and text.
+fn read_mesh_file(file: &str, f: &str, deck_dir: &Path) -> Result<(std::path::PathBuf, String)> {
+    let path = if Path::new(file).is_absolute() {
+        Path::new(file).to_path_buf()
+    } else {
+        deck_dir.join(file)
+    };
+    let bytes = std::fs::read(&path).map_err(|e| {
+        err(
+            format!("{f}.mesh.file"),
+            format!("cannot read `{}`: {e}", path.display()),
+        )
+    })?;
+    let text = String::from_utf8(bytes).map_err(|e| {
+        let why = if e.as_bytes().starts_with(b"$MeshFormat") {
+            "is a binary .msh file; alfe reads ASCII MSH 4.1 (gmsh -format msh41 -bin 0, Mesh.Binary = 0)"
+        } else {
+            "is not a text file (expected an ASCII Gmsh MSH 4.1 file)"
+        };
+        err(format!("{f}.mesh.file"), format!("`{}` {why}", path.display()))
+    })?;
+    Ok((path, text))
+}
+
+/// Drop nodes that no element uses (geometry points in Gmsh files): they would carry
+/// no stiffness and make the system singular.
+fn compact_unused_nodes(mesh: &mut Mesh) {
+    let mut used = vec![false; mesh.n_nodes()];
+    for &n in &mesh.conn {
+        used[n] = true;
+    }
+    if used.iter().all(|&u| u) {
+        return;
+    }
+    let mut map = vec![usize::MAX; used.len()];
+    let mut coords = Vec::new();
+    for (i, &u) in used.iter().enumerate() {
+        if u {
+            map[i] = coords.len();
+            coords.push(mesh.coords[i]);
+        }
+    }
+    mesh.coords = coords;
+    for n in mesh.conn.iter_mut() {
+        *n = map[*n];
+    }
+    for v in mesh.node_groups.values_mut() {
+        *v = v
+            .iter()
+            .filter(|&&n| map[n] != usize::MAX)
+            .map(|&n| map[n])
+            .collect();
+    }
+}
+
+/// A material deck entry → its definition, checking the fields its model needs and
+/// refusing the ones it does not use.
+fn material_def(m: &MaterialDeck, f: &str, deck: &Deck) -> Result<MaterialDef> {
+    let model = m.model.name();
+    let positive = |name: &str, v: Option<f64>| -> Result<f64> {
+        match v {
+            None => Err(err(
+                format!("{f}.{name}"),
+                format!("model `{model}` needs {name}"),
+            )),
+            Some(v) if v > 0.0 && v.is_finite() => Ok(v),
+            Some(v) => Err(err(
+                format!("{f}.{name}"),
+                format!("expected a positive value, got {v}"),
+            )),
+        }
+    };
+    let unused = |name: &str, given: bool| -> Result<()> {
+        if given {
+            Err(err(
+                format!("{f}.{name}"),
+                format!("is not a parameter of model `{model}`"),
+            ))
+        } else {
+            Ok(())
+        }
+    };
+    let nu = m.nu;
+    if !(nu > -1.0 && nu < 0.5) {
+        return Err(err(
+            format!("{f}.nu"),
+            format!("expected -1 < nu < 0.5, got {nu}"),
+        ));
+    }
+    if !(m.density >= 0.0 && m.density.is_finite()) {
+        return Err(err(
+            format!("{f}.density"),
+            format!("expected ≥ 0, got {}", m.density),
+        ));
+    }
+    let density = m.density;
+    let plastic_unused = || -> Result<()> {
+        unused("yield_stress", m.yield_stress.is_some())?;
+        unused("hardening", m.hardening.is_some())
+    };
+    Ok(match m.model {
+        MaterialModel::LinearElastic | MaterialModel::NeoHookean => {
+            let e = positive("E", m.e)?;
+            unused("C10", m.c10.is_some())?;
+            unused("C01", m.c01.is_some())?;
+            plastic_unused()?;
+            if m.model == MaterialModel::LinearElastic {
+                MaterialDef::LinearElastic { e, nu, density }
+            } else {
+                MaterialDef::NeoHookean { e, nu, density }
+            }
+        }
+        MaterialModel::MooneyRivlin => {
+            unused("E", m.e.is_some())?;
+            plastic_unused()?;
+            let c10 = m
+                .c10
+                .ok_or_else(|| err(format!("{f}.C10"), "model `mooney-rivlin` needs C10"))?;
+            let c01 = m.c01.unwrap_or(0.0);
+            if !(c10.is_finite() && c01.is_finite() && c10 + c01 > 0.0 && c10 >= 0.0 && c01 >= 0.0)
+            {
+                return Err(err(
+                    format!("{f}.C10"),
+                    format!(
+                        "expected C10 ≥ 0, C01 ≥ 0 and C10 + C01 > 0, got C10 = {c10}, C01 = {c01}"
+                    ),
+                ));
+            }
+            MaterialDef::MooneyRivlin {
+                c10,
+                c01,
+                nu,
+                density,
+            }
+        }
+        MaterialModel::J2 => {
+            let e = positive("E", m.e)?;
+            unused("C10", m.c10.is_some())?;
+            unused("C01", m.c01.is_some())?;
+            let sigma_y0 = positive("yield_stress", m.yield_stress)?;
+            let hf = format!("{f}.hardening");
+            let hardening = match &m.hardening {
+                None => Hardening::Linear { sigma_y0, h: 0.0 },
+                Some(HardeningDeck::Linear { modulus }) => Hardening::Linear {
+                    sigma_y0,
+                    h: *modulus,
+                },
+                Some(HardeningDeck::Power { k, n }) => Hardening::Power {
+                    sigma_y0,
+                    k: *k,
+                    n: *n,
+                },
+                Some(HardeningDeck::Table { points, curve }) => {
+                    let pts = match (points, curve) {
+                        (Some(p), None) => p.clone(),
+                        (None, Some(name)) => deck
+                            .curves
+                            .iter()
+                            .find(|c| &c.name == name)
+                            .map(|c| c.points.clone())
+                            .ok_or_else(|| {
+                                err(format!("{hf}.curve"), format!("unknown curve `{name}`"))
+                            })?,
+                        _ => {
+                            return Err(err(
+                                &hf,
+                                "a table needs exactly one of `points` or `curve`",
+                            ))
+                        }
+                    };
+                    if let Some(first) = pts.first() {
+                        if (first[1] - sigma_y0).abs() > 1e-12 * sigma_y0 {
+                            return Err(err(
+                                &hf,
+                                format!(
+                                    "the table starts at σ_y = {} but yield_stress is {sigma_y0}",
+                                    first[1]
+                                ),
+                            ));
+                        }
+                    }
+                    Hardening::Tabulated { points: pts }
+                }
+            };
+            hardening.validate().map_err(|why| err(&hf, why))?;
+            MaterialDef::J2 {
+                e,
+                nu,
+                hardening,
+                density,
+            }
+        }
+    })
+}
+
+/// A part's element formulation with its hourglass coefficient; `hourglass` is refused
+/// where no hourglass spring exists (standard hex8) and must be finite and ≥ 0.
+///
+/// `auto` takes the hybrid element for nearly incompressible hyperelastic parts in static
+/// and implicit analyses (Newton converges there as on compressible solids: rubber-indent
+/// newton 412 → 144 iterations, cook-membrane 83 → 16; README "Hybrid elements"), F-bar
+/// for them in explicit runs and for plastic parts (J2 gains nothing from the pressure
+/// unknown: plastic-bar 113 → 130 iterations), standard hex8 otherwise.
+fn part_formulation_of(
+    p: &PartDeck,
+    material: &MaterialDef,
+    field: &str,
+    explicit: bool,
+) -> Result<Formulation> {
+    let form = match p.formulation {
+        FormulationDeck::Standard => Formulation::Standard,
+        FormulationDeck::Fbar => Formulation::FBAR,
+        FormulationDeck::Reduced => Formulation::REDUCED,
+        FormulationDeck::Eas => Formulation::Eas,
+        FormulationDeck::Hybrid => {
+            if !material.has_volumetric_split() {
+                return Err(err(
+                    format!("{field}.formulation"),
+                    "the hybrid element needs a finite-strain material with a volumetric \
+                     part (neo-hookean, mooney-rivlin, j2); this part's is linear-elastic",
+                ));
+            }
+            if explicit {
+                return Err(err(
+                    format!("{field}.formulation"),
+                    "the hybrid element's pressure unknowns need a static or implicit \
+                     analysis; an explicit run takes formulation = \"fbar\"",
+                ));
+            }
+            Formulation::Hybrid { hourglass: 0.0 }
+        }
+        FormulationDeck::Auto if material.wants_hybrid() && !explicit => {
+            Formulation::Hybrid { hourglass: 0.0 }
+        }
+        FormulationDeck::Auto if material.wants_fbar() => Formulation::FBAR,
+        FormulationDeck::Auto => Formulation::Standard,
+    };
+    let Some(h) = p.hourglass else {
+        return Ok(form);
+    };
+    if !(h.is_finite() && h >= 0.0) {
+        return Err(err(
+            format!("{field}.hourglass"),
+            format!("expected a finite number ≥ 0, got {h}"),
+        ));
+    }
+    match form {
+        Formulation::FBar { .. } => Ok(Formulation::FBar { hourglass: h }),
+        Formulation::Reduced { .. } => Ok(Formulation::Reduced { hourglass: h }),
+        Formulation::Hybrid { .. } => Ok(Formulation::Hybrid { hourglass: h }),
+        Formulation::Standard | Formulation::Eas => Err(err(
+            format!("{field}.hourglass"),
+            "only F-bar, hybrid and reduced hex8 have an hourglass spring; this part's \
+             elements are standard or EAS (set formulation = \"fbar\", \"hybrid\" or \
+             \"reduced\")",
+        )),
+    }
+}
