@@ -621,8 +621,13 @@ fn build_wall(w: &WallDeck, f: &str, ctx: &Context, entity: bool) -> Result<Wall
             owner: 0,
         }),
     };
-    // No tracked node may start inside the wall: the multiplier/penalty would push it out
-    // with a force nobody asked for.
+    check_starts_outside(&def, f, ctx)?;
+    Ok(def)
+}
+
+/// No tracked node may start inside the wall: the multiplier or penalty would push it out
+/// with a force nobody asked for.
+fn check_starts_outside(def: &WallDef, f: &str, ctx: &Context) -> Result<()> {
     let s = def.shape.build();
     let pose0 = def.motion.pose(0.0);
     for &n in &def.nodes {
@@ -639,5 +644,5 @@ fn build_wall(w: &WallDeck, f: &str, ctx: &Context, entity: bool) -> Result<Wall
             }
         }
     }
-    Ok(def)
+    Ok(())
 }
