@@ -540,6 +540,23 @@ fn earlier_history(
     })
 }
 
+/// The failed attempts at the step that stopped the run (`iterations.csv`), numbered
+/// after the last converged step.
+fn log_failed_attempts(
+    iters: &mut IterationLog,
+    totals: &RunTotals,
+    records: &[StepRecord],
+    restart: &Option<Restart>,
+) {
+    let failed: Vec<&Attempt> = totals.failed_last.iter().collect();
+    let last_step = records
+        .last()
+        .map(|r| r.step)
+        .or(restart.as_ref().map(|r| r.step))
+        .unwrap_or(0);
+    iters.step(last_step + 1, &failed, false);
+}
+
 /// The analysis, the outputs and the summary of [`run`].
 #[allow(clippy::too_many_arguments)]
 fn execute(
@@ -616,13 +633,7 @@ fn execute(
     } = obs;
     *log = progress.log;
     let totals = totals?;
-    let failed: Vec<&Attempt> = totals.failed_last.iter().collect();
-    let last_step = records
-        .last()
-        .map(|r| r.step)
-        .or(restart.as_ref().map(|r| r.step))
-        .unwrap_or(0);
-    iters.step(last_step + 1, &failed, false);
+    log_failed_attempts(&mut iters, &totals, &records, &restart);
     phases.assembly = totals.seconds_assembly;
     phases.linear_solve = totals.seconds_linear;
     phases.preconditioner_setup = totals.seconds_pc_setup;
