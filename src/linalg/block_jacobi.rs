@@ -53,6 +53,10 @@ use faer::sparse::linalg::solvers::{Lu as SparseLu, SymbolicLu};
 use faer::sparse::linalg::LuError;
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMat};
 use faer::{Conj, Side};
+
+/// The local factor's kernels run on one thread: MPI gives one rank per core, and a
+/// thread pool would make results depend on scheduling.
+const LOCAL_PAR: faer::Par = faer::Par::Seq;
 use std::time::Instant;
 
 /// Which sparse factorization block Jacobi uses.
@@ -514,7 +518,7 @@ impl LocalFactor {
             .as_ref()
             .expect("symbolic Cholesky present");
         let a = SparseColMatRef::new(self.pattern.as_ref(), &self.csc_vals);
-        let par = faer::get_global_parallelism();
+        let par = LOCAL_PAR;
         let mut mem =
             MemBuffer::try_new(sym.factorize_numeric_llt_scratch::<f64>(par, Default::default()))
                 .map_err(|_| {
@@ -648,7 +652,7 @@ impl LocalFactor {
                     .symbolic_llt
                     .as_ref()
                     .expect("symbolic Cholesky present");
-                let par = faer::get_global_parallelism();
+                let par = LOCAL_PAR;
                 let mut mem = MemBuffer::new(sym.solve_in_place_scratch::<f64>(ncols, par));
                 LltRef::new(sym, &self.llt_values).solve_in_place_with_conj(
                     Conj::No,

@@ -79,12 +79,17 @@ impl Drop for PoisonOnPanic<'_> {
 /// Run `f` on `n` ranks, one thread each, and return the results in rank order.
 /// A panic on any rank is re-raised here (the first rank's own panic, not the
 /// follow-up panics of the ranks it released).
+///
+/// Like the `alfe` binary (one MPI rank per core), the ranks' dense and sparse kernels
+/// run sequentially: a rayon pool under each thread rank would make the floating-point
+/// results depend on scheduling.
 pub fn run_ranks<F, R>(n: usize, f: F) -> Vec<R>
 where
     F: Fn(&ThreadComm) -> R + Sync,
     R: Send,
 {
     assert!(n >= 1, "run_ranks needs at least one rank");
+    faer::set_global_parallelism(faer::Par::Seq);
     let shared = Shared {
         n,
         slots: Mutex::new((0..n).map(|_| None).collect()),
