@@ -194,7 +194,54 @@ fn parse(text: &str) -> Result<Raw, String> {
         line: 1,
         section: "MeshFormat",
     };
+    header(&mut lx)?;
+    let mut raw = Raw {
+        coords: Vec::new(),
+        phys_names: HashMap::new(),
+        entity_phys: HashMap::new(),
+        elems: Vec::new(),
+        conn: Vec::new(),
+    };
+    let mut node_index: HashMap<u64, usize> = HashMap::new();
+    let (mut seen_nodes, mut seen_elems) = (false, false);
 
+    while let Some((t, line)) = lx.next() {
+        let Some(name) = t.strip_prefix('$') else {
+            return Err(format!(
+                "line {line}: expected a section header such as $Nodes, found \"{t}\""
+            ));
+        };
+        lx.section = name;
+        match name {
+            "PhysicalNames" => physical_names(&mut lx, &mut raw)?,
+            "Entities" => entities(&mut lx, &mut raw)?,
+            "Nodes" => {
+                seen_nodes = true;
+                nodes(&mut lx, &mut raw, &mut node_index)?;
+            }
+            "Elements" => {
+                seen_elems = true;
+                elements(&mut lx, &mut raw, &node_index, seen_nodes)?;
+            }
+            _ => {
+                // $Periodic, $NodeData, ...: not needed.
+                skip_section(&mut lx, name)?;
+                continue;
+            }
+        }
+        lx.end()?;
+    }
+    if !seen_nodes || !seen_elems {
+        return Err(format!(
+            "mesh file has no ${} section",
+            if seen_nodes { "Elements" } else { "Nodes" }
+        ));
+    }
+    Ok(raw)
+}
+
+/// `$MeshFormat`: version 4.1, ASCII.
+fn header(lx: &mut Lexer) -> Result<(), String> {
     match lx.next() {
         Some(("$MeshFormat", _)) => {}
         Some((t, line)) => {
@@ -216,199 +263,193 @@ fn parse(text: &str) -> Result<Raw, String> {
     }
     lx.tok("the data size")?;
     lx.end()?;
+    Ok(())
+}
 
-    let mut raw = Raw {
-        coords: Vec::new(),
-        phys_names: HashMap::new(),
-        entity_phys: HashMap::new(),
-        elems: Vec::new(),
-        conn: Vec::new(),
-    };
-    let mut node_index: HashMap<u64, usize> = HashMap::new();
-    let (mut seen_nodes, mut seen_elems) = (false, false);
-
-    while let Some((t, line)) = lx.next() {
-        let Some(name) = t.strip_prefix('$') else {
+/// `$PhysicalNames`: (dimension, tag) → name.
+fn physical_names(lx: &mut Lexer, raw: &mut Raw) -> Result<(), String> {
+    let n = lx.count("the number of physical names")?;
+    for _ in 0..n {
+        let dim = lx.count("a physical group dimension")?;
+        let tag = lx.int("a physical group tag")?;
+        let (q, line) = lx.tok("a quoted physical group name")?;
+        let Some(s) = q.strip_prefix('"').and_then(|s| s.strip_suffix('"')) else {
             return Err(format!(
-                "line {line}: expected a section header such as $Nodes, found \"{t}\""
+                "line {line}: expected a quoted physical group name, found {q}"
             ));
         };
-        lx.section = name;
-        match name {
-            "PhysicalNames" => {
-                let n = lx.count("the number of physical names")?;
-                for _ in 0..n {
-                    let dim = lx.count("a physical group dimension")?;
-                    let tag = lx.int("a physical group tag")?;
-                    let (q, line) = lx.tok("a quoted physical group name")?;
-                    let Some(s) = q.strip_prefix('"').and_then(|s| s.strip_suffix('"')) else {
-                        return Err(format!(
-                            "line {line}: expected a quoted physical group name, found {q}"
-                        ));
-                    };
-                    raw.phys_names.insert((dim, tag), s.to_string());
-                }
+        raw.phys_names.insert((dim, tag), s.to_string());
+    }
+    Ok(())
+}
+
+/// `$Entities`: each entity's physical tags (coordinates and bounding entities skipped).
+fn entities(lx: &mut Lexer, raw: &mut Raw) -> Result<(), String> {
+    let counts = [
+        lx.count("the number of points")?,
+        lx.count("the number of curves")?,
+        lx.count("the number of surfaces")?,
+        lx.count("the number of volumes")?,
+    ];
+    for (dim, &n) in counts.iter().enumerate() {
+        for _ in 0..n {
+            let tag = lx.int("an entity tag")?;
+            // Points: x y z; others: a bounding box.
+            for _ in 0..if dim == 0 { 3 } else { 6 } {
+                lx.real("an entity coordinate")?;
             }
-            "Entities" => {
-                let counts = [
-                    lx.count("the number of points")?,
-                    lx.count("the number of curves")?,
-                    lx.count("the number of surfaces")?,
-                    lx.count("the number of volumes")?,
-                ];
-                for (dim, &n) in counts.iter().enumerate() {
-                    for _ in 0..n {
-                        let tag = lx.int("an entity tag")?;
-                        // Points: x y z; others: a bounding box.
-                        for _ in 0..if dim == 0 { 3 } else { 6 } {
-                            lx.real("an entity coordinate")?;
-                        }
-                        let np = lx.count("the number of physical tags")?;
-                        let mut tags = Vec::with_capacity(np);
-                        for _ in 0..np {
-                            tags.push(lx.int("a physical tag")?.abs());
-                        }
-                        if dim > 0 {
-                            let nb = lx.count("the number of bounding entities")?;
-                            lx.skip(nb, "a bounding entity tag")?;
-                        }
-                        if !tags.is_empty() {
-                            raw.entity_phys.insert((dim, tag), tags);
-                        }
-                    }
-                }
+            let np = lx.count("the number of physical tags")?;
+            let mut tags = Vec::with_capacity(np);
+            for _ in 0..np {
+                tags.push(lx.int("a physical tag")?.abs());
             }
-            "Nodes" => {
-                seen_nodes = true;
-                let blocks = lx.count("the number of node blocks")?;
-                let total = lx.count("the number of nodes")?;
-                lx.skip(2, "the min and max node tags")?;
-                raw.coords.reserve(total);
-                let mut tags = Vec::new();
-                for _ in 0..blocks {
-                    let edim = lx.count("an entity dimension")?;
-                    lx.int("an entity tag")?;
-                    let parametric = lx.uint("the parametric flag")? != 0;
-                    let n = lx.count("the number of nodes in the block")?;
-                    tags.clear();
-                    for _ in 0..n {
-                        let (t, line) = lx.tok("a node tag")?;
-                        let tag: u64 =
-                            t.parse().map_err(|_| format!("line {line}: expected a node tag (a positive integer), found \"{t}\""))?;
-                        if node_index
-                            .insert(tag, raw.coords.len() + tags.len())
-                            .is_some()
-                        {
-                            return Err(format!(
-                                "line {line}: node tag {tag} appears twice in $Nodes"
-                            ));
-                        }
-                        tags.push(tag);
-                    }
-                    for _ in 0..n {
-                        let x = [
-                            lx.real("a node coordinate")?,
-                            lx.real("a node coordinate")?,
-                            lx.real("a node coordinate")?,
-                        ];
-                        if parametric {
-                            lx.skip(edim, "a parametric coordinate")?;
-                        }
-                        raw.coords.push(x);
-                    }
-                }
+            if dim > 0 {
+                let nb = lx.count("the number of bounding entities")?;
+                lx.skip(nb, "a bounding entity tag")?;
             }
-            "Elements" => {
-                seen_elems = true;
-                let blocks = lx.count("the number of element blocks")?;
-                let header_line = lx.line;
-                let total = lx.count("the number of elements")?;
-                lx.skip(2, "the min and max element tags")?;
-                let first = raw.elems.len();
-                let mut tags: std::collections::HashSet<u64> = std::collections::HashSet::new();
-                for _ in 0..blocks {
-                    lx.count("an entity dimension")?;
-                    let entity = lx.int("an entity tag")?;
-                    let (t, type_line) = lx.tok("an element type")?;
-                    let ty: u64 =
-                        t.parse().map_err(|_| format!("line {type_line}: expected an element type (an integer), found \"{t}\""))?;
-                    let n = lx.count("the number of elements in the block")?;
-                    let Some((dim, nn)) = elem_type(ty) else {
-                        let (what, line) = match lx.next() {
-                            Some((t, l)) if n > 0 => (format!("element {t} has"), l),
-                            _ => ("an element block has".to_string(), type_line),
-                        };
-                        return Err(format!(
-                            "line {line}: {what} {}, which alfe does not read; use first-order hex8 or tet4 volumes, or quad4 sheets (Mesh.ElementOrder = 1)",
-                            elem_type_name(ty)
-                        ));
-                    };
-                    for _ in 0..n {
-                        let (t, line) = lx.tok("an element tag")?;
-                        let etag: u64 =
-                            t.parse().map_err(|_| format!("line {line}: expected an element tag (a positive integer), found \"{t}\""))?;
-                        if !tags.insert(etag) {
-                            return Err(format!(
-                                "line {line}: element tag {etag} appears twice in $Elements"
-                            ));
-                        }
-                        let at = raw.conn.len();
-                        for _ in 0..nn {
-                            let (t, l) = lx.tok("a node tag")?;
-                            let ntag: u64 = t.parse().map_err(|_| {
-                                format!("line {l}: element {etag}: expected a node tag (a positive integer), found \"{t}\"")
-                            })?;
-                            let Some(&v) = node_index.get(&ntag) else {
-                                let hint = if seen_nodes {
-                                    ""
-                                } else {
-                                    " ($Nodes must come before $Elements)"
-                                };
-                                return Err(format!("line {l}: element {etag} has node tag {ntag} that is not in $Nodes{hint}"));
-                            };
-                            raw.conn.push(v);
-                        }
-                        raw.elems.push(RawElem {
-                            dim,
-                            entity,
-                            tag: etag,
-                            line,
-                            nn,
-                            at,
-                        });
-                    }
-                }
-                if raw.elems.len() - first != total {
-                    return Err(format!(
-                        "line {header_line}: $Elements says {total} elements, its blocks hold {}",
-                        raw.elems.len() - first
-                    ));
-                }
-            }
-            _ => {
-                // $Periodic, $NodeData, ...: not needed.
-                let want = format!("$End{name}");
-                loop {
-                    match lx.next() {
-                        Some((t, _)) if t == want => break,
-                        Some(_) => {}
-                        None => {
-                            return Err(format!("end of file: ${name} is never closed by {want}"))
-                        }
-                    }
-                }
-                continue;
+            if !tags.is_empty() {
+                raw.entity_phys.insert((dim, tag), tags);
             }
         }
-        lx.end()?;
     }
-    if !seen_nodes || !seen_elems {
+    Ok(())
+}
+
+/// `$Nodes`: coordinates in order of appearance; `node_index` maps tags to indices.
+fn nodes(
+    lx: &mut Lexer,
+    raw: &mut Raw,
+    node_index: &mut HashMap<u64, usize>,
+) -> Result<(), String> {
+    let blocks = lx.count("the number of node blocks")?;
+    let total = lx.count("the number of nodes")?;
+    lx.skip(2, "the min and max node tags")?;
+    raw.coords.reserve(total);
+    let mut tags = Vec::new();
+    for _ in 0..blocks {
+        let edim = lx.count("an entity dimension")?;
+        lx.int("an entity tag")?;
+        let parametric = lx.uint("the parametric flag")? != 0;
+        let n = lx.count("the number of nodes in the block")?;
+        tags.clear();
+        for _ in 0..n {
+            let (t, line) = lx.tok("a node tag")?;
+            let tag: u64 = t.parse().map_err(|_| {
+                format!("line {line}: expected a node tag (a positive integer), found \"{t}\"")
+            })?;
+            if node_index
+                .insert(tag, raw.coords.len() + tags.len())
+                .is_some()
+            {
+                return Err(format!(
+                    "line {line}: node tag {tag} appears twice in $Nodes"
+                ));
+            }
+            tags.push(tag);
+        }
+        for _ in 0..n {
+            let x = [
+                lx.real("a node coordinate")?,
+                lx.real("a node coordinate")?,
+                lx.real("a node coordinate")?,
+            ];
+            if parametric {
+                lx.skip(edim, "a parametric coordinate")?;
+            }
+            raw.coords.push(x);
+        }
+    }
+    Ok(())
+}
+
+/// `$Elements`: connectivity by node index, with each element's entity, tag and line.
+fn elements(
+    lx: &mut Lexer,
+    raw: &mut Raw,
+    node_index: &HashMap<u64, usize>,
+    seen_nodes: bool,
+) -> Result<(), String> {
+    let blocks = lx.count("the number of element blocks")?;
+    let header_line = lx.line;
+    let total = lx.count("the number of elements")?;
+    lx.skip(2, "the min and max element tags")?;
+    let first = raw.elems.len();
+    let mut tags: std::collections::HashSet<u64> = std::collections::HashSet::new();
+    for _ in 0..blocks {
+        lx.count("an entity dimension")?;
+        let entity = lx.int("an entity tag")?;
+        let (t, type_line) = lx.tok("an element type")?;
+        let ty: u64 = t.parse().map_err(|_| {
+            format!("line {type_line}: expected an element type (an integer), found \"{t}\"")
+        })?;
+        let n = lx.count("the number of elements in the block")?;
+        let Some((dim, nn)) = elem_type(ty) else {
+            let (what, line) = match lx.next() {
+                Some((t, l)) if n > 0 => (format!("element {t} has"), l),
+                _ => ("an element block has".to_string(), type_line),
+            };
+            return Err(format!(
+                "line {line}: {what} {}, which alfe does not read; use first-order hex8 or tet4 volumes, or quad4 sheets (Mesh.ElementOrder = 1)",
+                elem_type_name(ty)
+            ));
+        };
+        for _ in 0..n {
+            let (t, line) = lx.tok("an element tag")?;
+            let etag: u64 = t.parse().map_err(|_| {
+                format!("line {line}: expected an element tag (a positive integer), found \"{t}\"")
+            })?;
+            if !tags.insert(etag) {
+                return Err(format!(
+                    "line {line}: element tag {etag} appears twice in $Elements"
+                ));
+            }
+            let at = raw.conn.len();
+            for _ in 0..nn {
+                let (t, l) = lx.tok("a node tag")?;
+                let ntag: u64 = t.parse().map_err(|_| {
+                    format!("line {l}: element {etag}: expected a node tag (a positive integer), found \"{t}\"")
+                })?;
+                let Some(&v) = node_index.get(&ntag) else {
+                    let hint = if seen_nodes {
+                        ""
+                    } else {
+                        " ($Nodes must come before $Elements)"
+                    };
+                    return Err(format!(
+                        "line {l}: element {etag} has node tag {ntag} that is not in $Nodes{hint}"
+                    ));
+                };
+                raw.conn.push(v);
+            }
+            raw.elems.push(RawElem {
+                dim,
+                entity,
+                tag: etag,
+                line,
+                nn,
+                at,
+            });
+        }
+    }
+    if raw.elems.len() - first != total {
         return Err(format!(
-            "mesh file has no ${} section",
-            if seen_nodes { "Elements" } else { "Nodes" }
+            "line {header_line}: $Elements says {total} elements, its blocks hold {}",
+            raw.elems.len() - first
         ));
     }
-    Ok(raw)
+    Ok(())
+}
+
+/// A section alfe does not need, up to its `$End` line.
+fn skip_section(lx: &mut Lexer, name: &str) -> Result<(), String> {
+    let want = format!("$End{name}");
+    loop {
+        match lx.next() {
+            Some((t, _)) if t == want => return Ok(()),
+            Some(_) => {}
+            None => return Err(format!("end of file: ${name} is never closed by {want}")),
+        }
+    }
 }
 
 /// Read an ASCII Gmsh MSH 4.1 volume mesh; volume elements get part index `part`.

@@ -150,8 +150,40 @@ pub fn extrude(s: &Surface, spec: &SheetSpec, part: u32) -> Result<Mesh, String>
         }
     }
     let quads: Vec<[usize; 4]> = orient(s)?.iter().map(|q| q.map(|n| map[n])).collect();
+    let dir = thickness_directions(s, &coords, &quads)?;
+    let mut mesh = stack_layers(s, spec, &coords, &dir, &quads, part)?;
+    let l = spec.layers;
     let np = coords.len();
+    surface_groups(s, &mut mesh, &quads, np, l);
+    let cols = Columns {
+        np,
+        l,
+        map: &map,
+        coords: &coords,
+        quads: &quads,
+    };
+    curve_and_point_groups(s, &mut mesh, &cols)?;
+    Ok(mesh)
+}
 
+/// Node n of layer k in the extruded mesh.
+fn layer_node(np: usize, k: usize, n: usize) -> usize {
+    k * np + n
+}
+
+/// The hex of quad q, layer k.
+fn layer_elem(l: usize, q: usize, k: usize) -> usize {
+    q * l + k
+}
+
+/// Per node, the direction of the thickness: the corner normals' angle-weighted mean,
+/// lengthened by the mitre factor 1/cos so that folds keep their thickness.
+fn thickness_directions(
+    s: &Surface,
+    coords: &[[f64; 3]],
+    quads: &[[usize; 4]],
+) -> Result<Vec<[f64; 3]>, String> {
+    let np = coords.len();
     // Corner normals, summed per node weighted by the corner's angle.
     let mut sum = vec![[0.0; 3]; np];
     let mut corner_normals: Vec<Vec<[f64; 3]>> = vec![Vec::new(); np];
@@ -197,7 +229,19 @@ pub fn extrude(s: &Surface, spec: &SheetSpec, part: u32) -> Result<Mesh, String>
         }
         dir[n] = u.map(|x| x / c);
     }
+    Ok(dir)
+}
 
+/// The layers of hex8 nodes and elements, each element checked for inversion.
+fn stack_layers(
+    s: &Surface,
+    spec: &SheetSpec,
+    coords: &[[f64; 3]],
+    dir: &[[f64; 3]],
+    quads: &[[usize; 4]],
+    part: u32,
+) -> Result<Mesh, String> {
+    let np = coords.len();
     let t = spec.thickness;
     let l = spec.layers;
     let base = match spec.offset {
@@ -217,8 +261,8 @@ pub fn extrude(s: &Surface, spec: &SheetSpec, part: u32) -> Result<Mesh, String>
         }
     }
     // Element of quad q, layer k: q * l + k; bottom face 0-1-2-3, normal along -n.
-    let node = |k: usize, n: usize| k * np + n;
-    for quad in &quads {
+    let node = |k: usize, n: usize| layer_node(np, k, n);
+    for quad in quads {
         for k in 0..l {
             let mut nodes = [0; 8];
             for i in 0..4 {
@@ -237,10 +281,15 @@ pub fn extrude(s: &Surface, spec: &SheetSpec, part: u32) -> Result<Mesh, String>
             ));
         }
     }
+    Ok(mesh)
+}
 
-    let elem = |q: usize, k: usize| q * l + k;
+/// Face groups `bottom`, `top`, and per physical surface its element, node, `.bottom`
+/// and `.top` groups.
+fn surface_groups(s: &Surface, mesh: &mut Mesh, quads: &[[usize; 4]], np: usize, l: usize) {
+    let elem = |q: usize, k: usize| layer_elem(l, q, k);
     let face = |e: usize, f: u8| FaceRef { elem: e, face: f };
-    let column = |n: usize| (0..=l).map(move |k| node(k, n));
+    let column = |n: usize| (0..=l).map(move |k| layer_node(np, k, n));
     let nq = quads.len();
     mesh.face_groups.insert(
         "bottom".into(),
@@ -270,6 +319,25 @@ pub fn extrude(s: &Surface, spec: &SheetSpec, part: u32) -> Result<Mesh, String>
         mesh.elem_groups.insert(g.clone(), elems);
         mesh.node_groups.insert(g.clone(), nodes);
     }
+}
+
+/// The extruded mesh's layout, for the groups of curves and points.
+struct Columns<'a> {
+    np: usize,
+    l: usize,
+    /// Surface node → sheet node (`usize::MAX` for nodes no quad uses).
+    map: &'a [usize],
+    coords: &'a [[f64; 3]],
+    quads: &'a [[usize; 4]],
+}
+
+/// Per physical curve its node group (whole columns) and, on the sheet's edge, its face
+/// group; per physical point its column of nodes.
+fn curve_and_point_groups(s: &Surface, mesh: &mut Mesh, c: &Columns) -> Result<(), String> {
+    let (np, l, map, coords, quads) = (c.np, c.l, c.map, c.coords, c.quads);
+    let elem = |q: usize, k: usize| layer_elem(l, q, k);
+    let face = |e: usize, f: u8| FaceRef { elem: e, face: f };
+    let column = |n: usize| (0..=l).map(move |k| layer_node(np, k, n));
     // Quad edge i (nodes i, i+1) is hex face 2 + i (see ElemKind::faces).
     let mut edge_quads: HashMap<(usize, usize), Vec<(usize, u8)>> = HashMap::new();
     for (q, quad) in quads.iter().enumerate() {
@@ -325,7 +393,7 @@ pub fn extrude(s: &Surface, spec: &SheetSpec, part: u32) -> Result<Mesh, String>
         nodes.dedup();
         mesh.node_groups.insert(g.clone(), nodes);
     }
-    Ok(mesh)
+    Ok(())
 }
 
 #[cfg(test)]

@@ -231,6 +231,120 @@ pub(crate) fn history_row(rec: &StepRecord, staged: bool, counts: &[bool]) -> St
     row
 }
 
+/// Collective: `/mesh`: coordinates, original ids, connectivity, partition and
+/// material; returns the XDMF topology and the bytes of coordinates written.
+fn write_mesh(comm: &dyn Comm, h5: &H5File, model: &Model) -> Result<(XdmfTopology, u64)> {
+    let l = &model.mesh;
+    let el = &model.solids.elements;
+    let n_nodes = l.n_nodes_global as u64;
+    let n_elems = l.n_elems_global as u64;
+    let node_start = l.node_start() as u64;
+    let elem_start = l.elem_start() as u64;
+    let coords: Vec<f64> = l.coords[..l.n_owned()].iter().flatten().copied().collect();
+    h5.write_rows_f64("/mesh/coordinates", n_nodes, 3, node_start, &coords)?;
+    let orig_n: Vec<i64> = l.orig_node.iter().map(|&n| n as i64).collect();
+    h5.write_rows_i64("/mesh/original_node_id", n_nodes, 1, node_start, &orig_n)?;
+    let topology = write_connectivity(comm, h5, model)?;
+    let part: Vec<i32> = vec![comm.rank() as i32; el.len()];
+    h5.write_rows_i32("/mesh/partition", n_elems, 1, elem_start, &part)?;
+    let mat: Vec<i32> = el.material.iter().map(|&m| m as i32).collect();
+    h5.write_rows_i32("/mesh/material", n_elems, 1, elem_start, &mat)?;
+    let orig_e: Vec<i64> = el.orig.iter().map(|&e| e as i64).collect();
+    h5.write_rows_i64("/mesh/original_element_id", n_elems, 1, elem_start, &orig_e)?;
+    Ok((topology, 8 * coords.len() as u64))
+}
+
+/// Collective: `/mesh/connectivity` in global (rank-contiguous) node numbers: one row
+/// per element where all elements are of one kind, else XDMF mixed (`[type, nodes...]`
+/// per element, offsets by exclusive scan).
+fn write_connectivity(comm: &dyn Comm, h5: &H5File, model: &Model) -> Result<XdmfTopology> {
+    let l = &model.mesh;
+    let el = &model.solids.elements;
+    let mut kinds = [0.0, 0.0];
+    for k in &el.kinds {
+        kinds[(*k == ElemKind::Tet4) as usize] = 1.0;
+    }
+    comm.allreduce_max(&mut kinds);
+    if kinds[0] > 0.0 && kinds[1] > 0.0 {
+        let mut mixed = Vec::new();
+        for e in 0..el.len() {
+            mixed.push(match el.kinds[e] {
+                ElemKind::Hex8 => 9,
+                ElemKind::Tet4 => 6,
+            });
+            mixed.extend(el.nodes(e).iter().map(|&n| l.global_node(n) as i64));
+        }
+        let (before, total) = comm.exclusive_scan(mixed.len() as u64);
+        h5.write_rows_i64("/mesh/connectivity", total, 1, before, &mixed)?;
+        return Ok(XdmfTopology::Mixed { n_entries: total });
+    }
+    let npe = if kinds[1] > 0.0 { 4 } else { 8 };
+    let conn: Vec<i64> = (0..el.len())
+        .flat_map(|e| {
+            el.nodes(e)
+                .iter()
+                .map(|&n| l.global_node(n) as i64)
+                .collect::<Vec<_>>()
+        })
+        .collect();
+    let (n_elems, start) = (l.n_elems_global as u64, l.elem_start() as u64);
+    h5.write_rows_i64("/mesh/connectivity", n_elems, npe, start, &conn)?;
+    Ok(if npe == 4 {
+        XdmfTopology::Tetrahedron
+    } else {
+        XdmfTopology::Hexahedron
+    })
+}
+
+/// Collective: the moving geometry's cells, once (rank 0 writes the rows, every rank
+/// takes part); returns the grids' output state, their XDMF grids and the bytes written.
+fn write_grids(
+    comm: &dyn Comm,
+    h5: &H5File,
+    model: &Model,
+) -> Result<(Vec<GridOut>, Vec<XdmfGrid>, u64)> {
+    let mut bytes = 0;
+    let specs = model.grids();
+    let names: Vec<String> = specs.iter().map(|g| g.name.clone()).collect();
+    let mut grids = Vec::new();
+    let mut xgrids = Vec::new();
+    for (g, group) in specs.iter().zip(grid_groups(&names)) {
+        let width = g.cells.first().map_or(3, |c| c.len()).clamp(1, 3);
+        let what = ["vertices", "segments", "triangles"][width - 1];
+        let path = format!("/{group}/{what}");
+        let flat: Vec<i64> = if comm.rank() == 0 {
+            g.cells.iter().flatten().map(|&i| i as i64).collect()
+        } else {
+            Vec::new()
+        };
+        h5.write_rows_i64(&path, g.cells.len() as u64, width as u64, 0, &flat)?;
+        for (k, v) in &g.attrs {
+            h5.write_attr_str(&format!("/{group}"), k, v)?;
+        }
+        bytes += 8 * flat.len() as u64;
+        xgrids.push(XdmfGrid {
+            name: g.label.clone(),
+            nodes_per_cell: width as u64,
+            steps: Vec::new(),
+        });
+        let path_grid = g.paths.then(|| {
+            xgrids.push(XdmfGrid {
+                name: format!("{}_path", g.label),
+                nodes_per_cell: 2,
+                steps: Vec::new(),
+            });
+            (xgrids.len() - 1, Vec::new())
+        });
+        grids.push(GridOut {
+            group,
+            n_points: g.n_points,
+            cells: (path, g.cells.len() as u64),
+            path: path_grid,
+        });
+    }
+    Ok((grids, xgrids, bytes))
+}
+
 impl ResultsWriter {
     /// Collective: create the files (named after `scene`) and write the mesh; `units`
     /// describes the unit system, `dynamic` adds the energy columns.
@@ -245,7 +359,6 @@ impl ResultsWriter {
     ) -> Result<Self> {
         let t0 = std::time::Instant::now();
         let l = &model.mesh;
-        let el = &model.solids.elements;
         let r = if comm.rank() == 0 {
             std::fs::create_dir_all(dir).map_err(|e| {
                 Error::runtime(format!(
@@ -263,98 +376,14 @@ impl ResultsWriter {
         let n_elems = l.n_elems_global as u64;
         let node_start = l.node_start() as u64;
         let elem_start = l.elem_start() as u64;
-        let no = l.n_owned();
         let mut bytes = 0u64;
         h5.write_attr_str("/", "scene", scene)?;
         h5.write_attr_str("/", "units", units)?;
         h5.write_attr_str("/", "alfe_version", env!("CARGO_PKG_VERSION"))?;
         h5.create_group("/mesh")?;
-        let coords: Vec<f64> = l.coords[..no].iter().flatten().copied().collect();
-        h5.write_rows_f64("/mesh/coordinates", n_nodes, 3, node_start, &coords)?;
-        bytes += 8 * coords.len() as u64;
-        let orig_n: Vec<i64> = l.orig_node.iter().map(|&n| n as i64).collect();
-        h5.write_rows_i64("/mesh/original_node_id", n_nodes, 1, node_start, &orig_n)?;
-        // Connectivity in global (rank-contiguous) node numbers.
-        let mut kinds = [0.0, 0.0];
-        for k in &el.kinds {
-            kinds[(*k == ElemKind::Tet4) as usize] = 1.0;
-        }
-        comm.allreduce_max(&mut kinds);
-        let topology = if kinds[0] > 0.0 && kinds[1] > 0.0 {
-            // XDMF mixed: [type, nodes...] per element; offsets by exclusive scan.
-            let mut mixed = Vec::new();
-            for e in 0..el.len() {
-                mixed.push(match el.kinds[e] {
-                    ElemKind::Hex8 => 9,
-                    ElemKind::Tet4 => 6,
-                });
-                mixed.extend(el.nodes(e).iter().map(|&n| l.global_node(n) as i64));
-            }
-            let (before, total) = comm.exclusive_scan(mixed.len() as u64);
-            h5.write_rows_i64("/mesh/connectivity", total, 1, before, &mixed)?;
-            XdmfTopology::Mixed { n_entries: total }
-        } else {
-            let npe = if kinds[1] > 0.0 { 4 } else { 8 };
-            let conn: Vec<i64> = (0..el.len())
-                .flat_map(|e| {
-                    el.nodes(e)
-                        .iter()
-                        .map(|&n| l.global_node(n) as i64)
-                        .collect::<Vec<_>>()
-                })
-                .collect();
-            h5.write_rows_i64("/mesh/connectivity", n_elems, npe, elem_start, &conn)?;
-            if npe == 4 {
-                XdmfTopology::Tetrahedron
-            } else {
-                XdmfTopology::Hexahedron
-            }
-        };
-        let part: Vec<i32> = vec![comm.rank() as i32; el.len()];
-        h5.write_rows_i32("/mesh/partition", n_elems, 1, elem_start, &part)?;
-        let mat: Vec<i32> = el.material.iter().map(|&m| m as i32).collect();
-        h5.write_rows_i32("/mesh/material", n_elems, 1, elem_start, &mat)?;
-        let orig_e: Vec<i64> = el.orig.iter().map(|&e| e as i64).collect();
-        h5.write_rows_i64("/mesh/original_element_id", n_elems, 1, elem_start, &orig_e)?;
-        // Moving geometry: cells once (rank 0 writes the rows, every rank takes part).
-        let specs = model.grids();
-        let names: Vec<String> = specs.iter().map(|g| g.name.clone()).collect();
-        let mut grids = Vec::new();
-        let mut xgrids = Vec::new();
-        for (g, group) in specs.iter().zip(grid_groups(&names)) {
-            let width = g.cells.first().map_or(3, |c| c.len()).clamp(1, 3);
-            let what = ["vertices", "segments", "triangles"][width - 1];
-            let path = format!("/{group}/{what}");
-            let flat: Vec<i64> = if comm.rank() == 0 {
-                g.cells.iter().flatten().map(|&i| i as i64).collect()
-            } else {
-                Vec::new()
-            };
-            h5.write_rows_i64(&path, g.cells.len() as u64, width as u64, 0, &flat)?;
-            for (k, v) in &g.attrs {
-                h5.write_attr_str(&format!("/{group}"), k, v)?;
-            }
-            bytes += 8 * flat.len() as u64;
-            xgrids.push(XdmfGrid {
-                name: g.label.clone(),
-                nodes_per_cell: width as u64,
-                steps: Vec::new(),
-            });
-            let path_grid = g.paths.then(|| {
-                xgrids.push(XdmfGrid {
-                    name: format!("{}_path", g.label),
-                    nodes_per_cell: 2,
-                    steps: Vec::new(),
-                });
-                (xgrids.len() - 1, Vec::new())
-            });
-            grids.push(GridOut {
-                group,
-                n_points: g.n_points,
-                cells: (path, g.cells.len() as u64),
-                path: path_grid,
-            });
-        }
+        let (topology, mesh_bytes) = write_mesh(comm, &h5, model)?;
+        let (grids, xgrids, grid_bytes) = write_grids(comm, &h5, model)?;
+        bytes += mesh_bytes + grid_bytes;
         h5.create_group("/steps")?;
         h5.flush()?;
         let cell_i32 = |name: &str, path: &str| XdmfAttr {
