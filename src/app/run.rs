@@ -15,7 +15,7 @@ use crate::output::log::Log;
 use crate::output::record::RunRecord;
 use crate::output::results::ResultsWriter;
 use crate::output::schedule::{OutputClock, Schedule};
-use crate::parallel::{broadcast, on_rank0, peak_rss_mb, Comm};
+use crate::parallel::{broadcast, on_rank0, peak_rss_mb, rank0_outcome, Comm};
 use crate::partition::cache;
 use crate::scene::{RunSettings, Scene};
 use crate::solve::nonlinear::SolverKind;
@@ -510,12 +510,7 @@ fn write_summary(comm: &dyn Comm, out: &std::path::Path, summary: &Summary) -> R
     } else {
         Ok(())
     };
-    if !comm.all_ok(r.is_ok()) {
-        return Err(r
-            .err()
-            .unwrap_or_else(|| Error::runtime("writing summary.json failed on rank 0")));
-    }
-    Ok(())
+    rank0_outcome(comm, r)
 }
 
 /// The earlier run's history up to the restart (copied into this run's), so quantities

@@ -74,7 +74,7 @@ impl BoomerAmg {
 
     fn build(&self, comm: &dyn Comm, k: &DistMatrix) -> Result<State, String> {
         let raw = comm.raw_mpi().ok_or(
-            "AMG (hypre BoomerAMG) needs an MPI communicator; use block-jacobi or asm here",
+            "AMG (hypre BoomerAMG) needs an MPI communicator; use two-level, asm or block-jacobi here",
         )?;
         let n_own = k.layout().owned_len();
         let pat = diagonal_pattern(k);
@@ -163,7 +163,7 @@ impl BoomerAmg {
                             "AMG needs a positive diagonal, but unknown {a} of block {global} \
                          has {d:e} after the contact multipliers are condensed (a sliding \
                          frictional node, or multipliers that cannot be condensed); \
-                         block-jacobi and asm take any matrix"
+                         two-level, asm and block-jacobi take any matrix"
                         ));
                     }
                 }

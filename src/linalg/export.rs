@@ -9,7 +9,7 @@
 //! blocks of each rank's range) and the global unknowns' blocks (`global_blocks`).
 
 use super::DistMatrix;
-use crate::parallel::Comm;
+use crate::parallel::{rank0_outcome, Comm};
 use crate::{Error, Result};
 use std::io::Write;
 use std::path::Path;
@@ -48,12 +48,7 @@ pub fn write_alfe_solve(
     } else {
         Ok(())
     };
-    if !comm.all_ok(r.is_ok()) {
-        return Err(r
-            .err()
-            .unwrap_or_else(|| Error::runtime("the system export failed on rank 0")));
-    }
-    Ok(())
+    rank0_outcome(comm, r)
 }
 
 /// Collective: write `k`, `b` (owned parts) and, if given, the owned nodes' coordinates
@@ -137,10 +132,5 @@ pub fn write_petsc(
     } else {
         Ok(())
     };
-    if !comm.all_ok(r.is_ok()) {
-        return Err(r
-            .err()
-            .unwrap_or_else(|| Error::runtime("the system export failed on rank 0")));
-    }
-    Ok(())
+    rank0_outcome(comm, r)
 }

@@ -12,7 +12,7 @@ use super::xdmf::{
 use crate::mesh::ElemKind;
 use crate::model::contribution::Center as FieldCenter;
 use crate::model::Model;
-use crate::parallel::Comm;
+use crate::parallel::{rank0_outcome, Comm};
 use crate::solve::stepping::StepRecord;
 use crate::{Error, Result};
 use std::io::Write;
@@ -51,16 +51,6 @@ pub struct ResultsWriter {
     n_node_dofs: usize,
     pub seconds: f64,
     pub bytes_written: u64,
-}
-
-/// Every rank learns whether a rank-0-only action succeeded, so none is left waiting.
-fn agree(comm: &dyn Comm, r: Result<()>) -> Result<()> {
-    let ok = comm.all_ok(r.is_ok());
-    match (r, ok) {
-        (Err(e), _) => Err(e),
-        (Ok(()), false) => Err(Error::runtime("writing results failed on rank 0")),
-        (Ok(()), true) => Ok(()),
-    }
 }
 
 /// HDF5 group paths of the grids: each `/`-separated component of the names the
@@ -369,7 +359,7 @@ impl ResultsWriter {
         } else {
             Ok(())
         };
-        agree(comm, r)?;
+        rank0_outcome(comm, r)?;
         let h5_name = format!("{scene}.h5");
         let h5 = H5File::create(comm, &dir.join(&h5_name))?;
         let n_nodes = l.n_nodes_global as u64;
@@ -429,7 +419,7 @@ impl ResultsWriter {
         } else {
             Ok(())
         };
-        agree(comm, r)?;
+        rank0_outcome(comm, r)?;
         let mut w = Self {
             h5,
             xmf_path,
@@ -508,7 +498,7 @@ impl ResultsWriter {
             }
             None => Ok(()),
         };
-        agree(comm, r)?;
+        rank0_outcome(comm, r)?;
         Ok(carried)
     }
 
@@ -545,7 +535,7 @@ impl ResultsWriter {
         } else {
             Ok(())
         };
-        agree(comm, r)?;
+        rank0_outcome(comm, r)?;
         if fields {
             let g = format!("/steps/{:06}", rec.step);
             self.h5.create_group(&g)?;
@@ -645,7 +635,7 @@ impl ResultsWriter {
             } else {
                 Ok(())
             };
-            agree(comm, r)?;
+            rank0_outcome(comm, r)?;
         }
         self.seconds += t0.elapsed().as_secs_f64();
         Ok(())

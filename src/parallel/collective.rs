@@ -51,6 +51,12 @@ pub fn on_rank0<T>(comm: &dyn Comm, f: impl FnOnce() -> Result<T>) -> Result<Opt
     })
 }
 
+/// Collective: rank 0's outcome `r` of an action only it took (a file written) on every
+/// rank, its error message included; the other ranks' `r` is ignored.
+pub fn rank0_outcome(comm: &dyn Comm, r: Result<()>) -> Result<()> {
+    on_rank0(comm, move || r).map(|_| ())
+}
+
 /// Collective: rank 0's value on every rank (serialised).
 pub fn broadcast<T: serde::Serialize + serde::de::DeserializeOwned>(
     comm: &dyn Comm,

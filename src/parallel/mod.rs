@@ -10,7 +10,7 @@ pub mod layout;
 pub mod mpi_comm;
 pub mod thread_comm;
 
-pub use collective::{broadcast, on_rank0, peak_rss_mb};
+pub use collective::{broadcast, on_rank0, peak_rss_mb, rank0_outcome};
 pub use comm::{Comm, SerialComm, Traffic};
 pub use halo::HaloPlan;
 pub use layout::Layout;

@@ -165,7 +165,7 @@ fn check_entities(deck: &Deck) -> Result<()> {
         return Err(err(
             "[solver.linear] preconditioner",
             "\"amg\" needs an elliptic matrix, but the [[entities]] add rigid-body \
-             unknowns coupled to all their tracked nodes; use \"block-jacobi\" or \"asm\"",
+             unknowns coupled to all their tracked nodes; use \"two-level\" (the default on more than one rank), \"asm\" or \"block-jacobi\"",
         ));
     }
     Ok(())
@@ -180,7 +180,7 @@ fn check_amg_refusals(deck: &Deck) -> Result<()> {
             "[solver.linear] preconditioner",
             "\"amg\" needs an elliptic matrix, but [[pairs]] and [[bolts]] couple each \
              multiplier to a node and a reference face on another part (measured on \
-             two-body-hertz: a condensed diagonal turns negative); use \"block-jacobi\" or \"asm\"",
+             two-body-hertz: a condensed diagonal turns negative); use \"two-level\" (the default on more than one rank), \"asm\" or \"block-jacobi\"",
         ));
     }
     if !deck.couplings.is_empty() && deck.solver.linear.preconditioner == crate::linalg::PcKind::Amg
@@ -188,7 +188,7 @@ fn check_amg_refusals(deck: &Deck) -> Result<()> {
         return Err(err(
             "[solver.linear] preconditioner",
             "\"amg\" needs an elliptic matrix, but the [[couplings]] add constraint \
-             multipliers that cannot be condensed node by node; use \"block-jacobi\" or \"asm\"",
+             multipliers that cannot be condensed node by node; use \"two-level\" (the default on more than one rank), \"asm\" or \"block-jacobi\"",
         ));
     }
     Ok(())

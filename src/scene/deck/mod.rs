@@ -671,8 +671,9 @@ pub struct LinearDeck {
     pub restart: usize,
     #[serde(default = "d_lmax")]
     pub max_iterations: usize,
-    /// "auto" (default), "auto-factored", "block-jacobi", "asm", "amg" or "none". "auto"
-    /// is "auto-factored" (block Jacobi on one rank, ASM on more) for problem classes AMG does not suit
+    /// "auto" (default), "auto-factored", "block-jacobi", "asm", "two-level",
+    /// "two-level-bj", "amg" or "none". "auto" is "auto-factored" (block Jacobi on one
+    /// rank, two-level Schwarz on more) for problem classes AMG does not suit
     /// (`scene::build::amg_unsuited`), and otherwise AMG from a size on
     /// (`linalg::PcKind::resolve`).
     #[serde(default)]
