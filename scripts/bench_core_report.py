@@ -169,7 +169,7 @@ def main():
             L.append(f"| alfe / PETSc ({best[p]}) time to rtol, {p} rank(s), numeric refactorization + solve ≤ {TARGET_RATIO} | "
                      f"{summary[f'ratio_warm_r{p}']:.2f} | {check(summary[f'ratio_warm_r{p}'], TARGET_RATIO, False)} |")
     L.append("")
-    L.append("## alfe (`alfe bench-linear`)\n")
+    L.append("## alfe (`alfe-bench linear`)\n")
     L.append("| | " + " | ".join(f"{p} rank(s)" for p in alfe) + " |")
     L.append("|---|" + "---|" * len(alfe))
     rows = [

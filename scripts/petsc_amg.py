@@ -1,6 +1,6 @@
 #!/usr/bin/python3
-"""PETSc peer for `alfe bench-linear --pc amg`: GMRES with hypre's BoomerAMG (through
-PETSc's PCHYPRE) on a system exported by `alfe bench-linear --export DIR`.
+"""PETSc peer for `alfe-bench linear --pc amg`: GMRES with hypre's BoomerAMG (through
+PETSc's PCHYPRE) on a system exported by `alfe-bench linear --export DIR`.
 
     PETSC_DIR=/usr/lib/petscdir/petsc3.18/x86_64-linux-gnu-real \\
     mpirun -n R /usr/bin/python3 scripts/petsc_amg.py A.petsc b.petsc \\

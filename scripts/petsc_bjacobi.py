@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""PETSc peer for `alfe bench-linear`: block-Jacobi-preconditioned GMRES on an exported system.
+"""PETSc peer for `alfe-bench linear`: block-Jacobi-preconditioned GMRES on an exported system.
 
 Usage (Debian's petsc4py: run with /usr/bin/python3 and PETSC_DIR set, see SETUP.md):
 
@@ -9,7 +9,7 @@ Usage (Debian's petsc4py: run with /usr/bin/python3 and PETSC_DIR set, see SETUP
         [--local-rows N0,N1,...] [--refactor-reps 3] [--json OUT.json]
     /usr/bin/python3 scripts/petsc_bjacobi.py --list-solvers
 
-Reads A and b written by `alfe bench-linear --export DIR` (PETSc binary, MatLoad/VecLoad),
+Reads A and b written by `alfe-bench linear --export DIR` (PETSc binary, MatLoad/VecLoad),
 optionally with alfe's row ownership (`--local-rows`, the `owned_dofs_per_rank` of alfe's
 JSON) so each rank's block-Jacobi block is exactly alfe's. Then: KSP GMRES (restart 60),
 right preconditioning (rtol measures the true, unpreconditioned residual, as alfe does),

@@ -1,6 +1,6 @@
 #!/usr/bin/python3
 """PETSc peers for alfe's domain-decomposition preconditioners, on a system written by
-`alfe run --export-system DIR` (or `alfe bench-linear --export DIR`).
+`alfe run --export-system DIR` (or `alfe-bench linear --export DIR`).
 
 Usage (Debian's petsc4py: /usr/bin/python3 with PETSC_DIR set, see SETUP.md):
 

@@ -1,4 +1,4 @@
-"""Loading an `alfe bench-linear --export` system into PETSc, shared by the PETSc peers
+"""Loading an `alfe-bench linear --export` system into PETSc, shared by the PETSc peers
 (petsc_bjacobi.py, petsc_amg.py): A and b from PETSc binary files, optionally on alfe's
 row ownership so that each rank holds exactly alfe's rows."""
 import struct

@@ -9,11 +9,10 @@
 //! (METIS, ownership, distribution); [`model`] (the distributed problem as a list of
 //! contributions); [`solve`] (nonlinear solvers, stepping, time integration); [`output`]
 //! (HDF5/XDMF, CSV, JSON, restart files); [`scene`] (decks); [`app`] (what the commands
-//! do), and the benchmarks.
+//! do). The binaries sit on top: `alfe` (`src/main.rs`) and the benchmarks `alfe-bench`
+//! (`src/bin/alfe-bench/`), both through the public API only.
 
 pub mod app;
-pub mod bench;
-pub mod bench_residual;
 pub mod contact;
 pub mod curve;
 pub mod error;

@@ -53,40 +53,6 @@ enum Command {
         #[arg(long, default_value = "partitions")]
         partitions: PathBuf,
     },
-    /// Linear-elastic block: assembly, preconditioner set-up, GMRES and HDF5 rates
-    /// (scripts/bench-core uses it).
-    BenchLinear {
-        /// Cells NX,NY,NZ.
-        #[arg(long)]
-        cells: Option<String>,
-        /// GMRES relative tolerance.
-        #[arg(long)]
-        rtol: Option<String>,
-        /// Write the measurements to this JSON file.
-        #[arg(long)]
-        json: Option<String>,
-        /// Export the matrix and right-hand side to this directory.
-        #[arg(long)]
-        export: Option<String>,
-        /// Preconditioner: block-jacobi, asm or amg.
-        #[arg(long)]
-        pc: Option<String>,
-        /// AMG's near-null space from the rigid-body rotations.
-        #[arg(long)]
-        rigid_body_modes: bool,
-    },
-    /// Residual and tangent rates per material and formulation.
-    BenchResidual {
-        /// Cells NX,NY,NZ.
-        #[arg(long)]
-        cells: Option<String>,
-        /// Repetitions.
-        #[arg(long)]
-        reps: Option<String>,
-        /// Write the measurements to this JSON file.
-        #[arg(long)]
-        json: Option<String>,
-    },
 }
 
 #[derive(Subcommand, Debug)]
@@ -224,16 +190,7 @@ impl ContactArg {
 
 /// The subcommand names (an argument that is none of them, nor an option, is a target
 /// to run: `alfe my.toml`).
-const COMMANDS: [&str; 8] = [
-    "run",
-    "scenes",
-    "scene",
-    "check",
-    "partition",
-    "bench-linear",
-    "bench-residual",
-    "help",
-];
+const COMMANDS: [&str; 6] = ["run", "scenes", "scene", "check", "partition", "help"];
 
 /// `alfe`, `alfe DECK` and `alfe --out DIR` mean `alfe run ...`.
 fn with_default_command(raw: Vec<String>) -> Vec<String> {
@@ -373,28 +330,6 @@ fn main_inner(comm: &dyn Comm, raw: Vec<String>) -> Result<()> {
             }
             Ok(())
         }
-        Command::BenchLinear {
-            cells,
-            rtol,
-            json,
-            export,
-            pc,
-            rigid_body_modes,
-        } => alfe::bench::bench_linear(
-            comm,
-            cells.as_deref(),
-            rtol.as_deref(),
-            json.as_deref(),
-            export.as_deref(),
-            pc.as_deref(),
-            rigid_body_modes,
-        ),
-        Command::BenchResidual { cells, reps, json } => alfe::bench_residual::bench_residual(
-            comm,
-            cells.as_deref(),
-            reps.as_deref(),
-            json.as_deref(),
-        ),
     }
 }
 

@@ -1,5 +1,5 @@
-//! The `alfe` binary as users run it: on 1 rank and under `mpirun -n 2`, launched as a
-//! subprocess (MPI can be initialised once per process). Every launch has a time limit,
+//! The `alfe` binary (and `alfe-bench`) as users run it: on 1 rank and under `mpirun -n
+//! 2`, launched as a subprocess (MPI can be initialised once per process). Every launch has a time limit,
 //! so a rank that hangs fails the test instead of the suite.
 
 mod common;
@@ -8,6 +8,7 @@ use std::path::Path;
 use std::process::{Command, Output};
 
 const ALFE: &str = env!("CARGO_BIN_EXE_alfe");
+const ALFE_BENCH: &str = env!("CARGO_BIN_EXE_alfe-bench");
 
 /// One launch at a time: Open MPI ranks busy-poll while they wait, so two 2-rank jobs
 /// on a 2-core machine starve each other (tests run on parallel threads).
@@ -20,13 +21,23 @@ fn alfe(dir: &Path, ranks: usize, args: &[&str]) -> Output {
 
 /// [`alfe`] with extra environment variables (Open MPI's `OMPI_MCA_*` settings).
 fn alfe_env(dir: &Path, ranks: usize, args: &[&str], env: &[(&str, &str)]) -> Output {
+    launch(ALFE, dir, ranks, args, env)
+}
+
+/// Run `alfe-bench ARGS` (the benchmarks' binary) as [`alfe`] runs `alfe`.
+fn alfe_bench(dir: &Path, ranks: usize, args: &[&str]) -> Output {
+    launch(ALFE_BENCH, dir, ranks, args, &[])
+}
+
+/// Run the binary `bin` with `ARGS` on `ranks` ranks in `dir`, with a time limit.
+fn launch(bin: &str, dir: &Path, ranks: usize, args: &[&str], env: &[(&str, &str)]) -> Output {
     let _one_at_a_time = LAUNCH.lock().unwrap_or_else(|e| e.into_inner());
     let mut cmd = Command::new("timeout");
     cmd.arg("180");
     if ranks > 1 {
         cmd.args(["mpirun", "--oversubscribe", "-n", &ranks.to_string()]);
     }
-    cmd.arg(ALFE).args(args).current_dir(dir);
+    cmd.arg(bin).args(args).current_dir(dir);
     cmd.env("OMPI_ALLOW_RUN_AS_ROOT", "1")
         .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1");
     // Waiting ranks yield the core instead of spinning (the machine may be shared).
@@ -36,7 +47,7 @@ fn alfe_env(dir: &Path, ranks: usize, args: &[&str], env: &[(&str, &str)]) -> Ou
     assert_ne!(
         out.status.code(),
         Some(124),
-        "alfe {args:?} on {ranks} ranks hung (killed after 180 s)"
+        "{bin} {args:?} on {ranks} ranks hung (killed after 180 s)"
     );
     out
 }
@@ -496,17 +507,11 @@ fn hybrid_elements_with_amg_on_two_ranks() {
 #[test]
 fn gmres_block_jacobi_two_ranks_59k_unknowns() {
     let dir = temp_dir("gmres59k");
-    ok(alfe(
+    ok(alfe_bench(
         &dir,
         2,
         &[
-            "bench-linear",
-            "--cells",
-            "26,26,26",
-            "--rtol",
-            "1e-8",
-            "--json",
-            "b.json",
+            "linear", "--cells", "26,26,26", "--rtol", "1e-8", "--json", "b.json",
         ],
     ));
     let b: serde_json::Value = read_json(&dir.join("b.json"));
@@ -1050,19 +1055,11 @@ fn amg_iterations_flat_from_one_to_two_ranks() {
     let mut its = Vec::new();
     for ranks in [1, 2] {
         let json = format!("amg{ranks}.json");
-        ok(alfe(
+        ok(alfe_bench(
             &dir,
             ranks,
             &[
-                "bench-linear",
-                "--cells",
-                "20,20,20",
-                "--rtol",
-                "1e-8",
-                "--pc",
-                "amg",
-                "--json",
-                &json,
+                "linear", "--cells", "20,20,20", "--rtol", "1e-8", "--pc", "amg", "--json", &json,
             ],
         ));
         let b: serde_json::Value = read_json(&dir.join(&json));

@@ -339,7 +339,7 @@ impl Drop for IjVector {
 /// `hertz-sphere`'s geometrically graded mesh (1.3 mm cells at the contact, 60 mm far
 /// away) that gave 83 GMRES iterations per Newton iteration, 0.7 gave 75, **0.8 gave 25**
 /// and 0.9 25 (penalty contact, 1 rank, rtol 10⁻¹⁰); on the uniform elastic block of
-/// `alfe bench-linear --cells 36,36,36` 0.8 costs 18 iterations against 14 at 0.5.
+/// `alfe-bench linear --cells 36,36,36` 0.8 costs 18 iterations against 14 at 0.5.
 const STRONG_THRESHOLD: f64 = 0.8;
 
 /// BoomerAMG as a preconditioner (one V-cycle, zero tolerance) with the options MFEM's

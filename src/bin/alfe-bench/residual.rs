@@ -1,11 +1,26 @@
-//! `alfe bench-residual`: residual-evaluation and tangent-assembly rates (elements per
+//! `alfe-bench residual`: residual-evaluation and tangent-assembly rates (elements per
 //! second per rank) of the material/formulation pairs the scenes use, on one generated
 //! hex8 block at a fixed inhomogeneous deformation, on however many ranks it is started
 //! with. scripts/bench-core runs it on 1 and 2 ranks beside the linear benchmark.
 
-use crate::bench::{generated_model, time_median};
-use crate::parallel::Comm;
-use crate::{Error, Result};
+use crate::common::{generated_model, report, time_median, Cells};
+use alfe::parallel::Comm;
+use alfe::Result;
+use std::path::PathBuf;
+
+/// `alfe-bench residual`'s options.
+#[derive(clap::Args, Debug)]
+pub struct ResidualArgs {
+    /// Cells NX,NY,NZ of the unit block.
+    #[arg(long, value_name = "NX,NY,NZ", default_value = "30,30,30")]
+    pub cells: Cells,
+    /// Repetitions (the median is reported).
+    #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(1..))]
+    pub reps: u32,
+    /// Write the measurements to this JSON file.
+    #[arg(long, value_name = "FILE")]
+    pub json: Option<PathBuf>,
+}
 
 /// (label, material table, part formulation).
 const CASES: &[(&str, &str, &str)] = &[
@@ -52,21 +67,10 @@ fn deck(cells: [usize; 3], material: &str, formulation: &str) -> String {
     )
 }
 
-pub fn bench_residual(
-    comm: &dyn Comm,
-    cells: Option<&str>,
-    reps: Option<&str>,
-    json: Option<&str>,
-) -> Result<()> {
-    let cells = crate::bench::parse_cells(cells, [30, 30, 30])?;
-    let reps: usize = match reps {
-        None => 5,
-        Some(s) => s
-            .parse()
-            .ok()
-            .filter(|&r: &usize| r >= 1)
-            .ok_or_else(|| Error::input(format!("--reps: expected a count ≥ 1, got `{s}`")))?,
-    };
+/// Run every case on the ranks of `comm`; the report goes to stdout (rank 0) and
+/// `--json`.
+pub fn run(comm: &dyn Comm, a: &ResidualArgs) -> Result<()> {
+    let (cells, reps) = (a.cells.0, a.reps as usize);
     let p = comm.size();
     let mut rows = Vec::new();
     for (label, material, formulation) in CASES {
@@ -102,12 +106,5 @@ pub fn bench_residual(
         }));
     }
     let out = serde_json::json!({ "ranks": p, "cells": cells, "reps": reps, "cases": rows });
-    if comm.rank() == 0 {
-        println!("{}", serde_json::to_string_pretty(&out).unwrap());
-        if let Some(j) = json {
-            std::fs::write(j, serde_json::to_string_pretty(&out).unwrap() + "\n")
-                .map_err(|e| Error::runtime(format!("cannot write `{j}`: {e}")))?;
-        }
-    }
-    Ok(())
+    report(comm, &out, a.json.as_deref())
 }
