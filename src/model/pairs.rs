@@ -16,7 +16,7 @@ use super::dofs::{DofMap, Unknowns};
 use super::kind::{ContributionKind, Localizer};
 use super::local::{LocalElements, LocalMesh};
 use crate::contact::law::{AlmLaw, Branch, Decision, Threshold};
-use crate::contact::pair::{evaluate, PairLaw};
+use crate::contact::pair::{evaluate, Offsets, PairLaw};
 use crate::contact::wall::ContactMethod;
 use crate::curve::Curve;
 use serde::{Deserialize, Serialize};
@@ -291,9 +291,11 @@ impl Pairs {
                 &p.w,
                 &p.dn,
                 [0.0; 3],
-                [0.0; 3],
-                [0.0; 3],
-                0.0,
+                &Offsets {
+                    c_n: [0.0; 3],
+                    c_t: [0.0; 3],
+                    shift: 0.0,
+                },
                 &PairLaw::TiedPenalty { kp: 0.0 },
                 Decision::Natural,
             );
@@ -454,7 +456,15 @@ impl Contribution for Pairs {
             };
             let law = self.law(j);
             let p = &self.def.pairs[j];
-            let e = evaluate(&x, &p.w, &p.dn, lam, c_n, c_t, s, &law, decision);
+            let e = evaluate(
+                &x,
+                &p.w,
+                &p.dn,
+                lam,
+                &Offsets { c_n, c_t, shift: s },
+                &law,
+                decision,
+            );
             let nodes: Vec<usize> = std::iter::once(p.node)
                 .chain(p.nodes.iter().copied())
                 .collect();
