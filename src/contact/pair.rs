@@ -195,27 +195,33 @@ pub struct PairEval {
 /// stick row whose node is held by a support regular.
 const JACOBIAN_REG: f64 = 1e-8;
 
-/// Evaluate one pair: `x[0]` the tracked node, `x[1..]` the reference nodes (current
-/// positions) with their weights `w` in x_m and their shape-function derivatives `dn`
-/// (∂N/∂ξ, ∂N/∂η at the node's point on its face; zero for nodes off that face) that
-/// give the frame; `lam` its multipliers (ignored without); `c_n`, `c_t` the gap
-/// offsets (see the module docs); `shift` s is added to the normal gap (a bolt's
-/// pretension section: g_N = n · (d − c_N) + s, so s > 0 pulls the two sides s into each
-/// other); `decision` the law's branch choice.
-#[allow(clippy::too_many_arguments)]
-pub fn evaluate(
-    x: &[[f64; 3]],
-    w: &[f64],
-    dn: &[[f64; 2]],
-    lam: [f64; 3],
-    c_n: [f64; 3],
-    c_t: [f64; 3],
-    shift: f64,
-    law: &PairLaw,
-    decision: Decision,
-) -> PairEval {
+/// What a pair's gaps are measured from: `c_n`, `c_t` the gap offsets (see the module
+/// docs) and `shift` s added to the normal gap (a bolt's pretension section:
+/// g_N = n · (d − c_N) + s, so s > 0 pulls the two sides s into each other).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Offsets {
+    pub c_n: [f64; 3],
+    pub c_t: [f64; 3],
+    pub shift: f64,
+}
+
+/// The reference face's frame at the node's point and the node's offset from it.
+struct Frame {
+    /// Reference nodes.
+    nf: usize,
+    /// d = x_s − x_m.
+    d: [f64; 3],
+    /// ∂x/∂ξ, ∂x/∂η at the point, and |a1 × a2|, |a1|.
+    a1: [f64; 3],
+    a2: [f64; 3],
+    la: f64,
+    l1: f64,
+    /// [n, t1, t2].
+    cols: [[f64; 3]; 3],
+}
+
+fn frame(x: &[[f64; 3]], nn: &[f64], dn: &[[f64; 2]]) -> Frame {
     let nf = x.len() - 1;
-    let nn = w;
     let mut xm = [0.0; 3];
     let mut a1 = [0.0; 3];
     let mut a2 = [0.0; 3];
@@ -232,16 +238,41 @@ pub fn evaluate(
     let n = [a[0] / la, a[1] / la, a[2] / la];
     let t1 = [a1[0] / l1, a1[1] / l1, a1[2] / l1];
     let t2 = cross(n, t1);
-    let cols = [n, t1, t2];
-    let e = [
-        [d[0] - c_n[0], d[1] - c_n[1], d[2] - c_n[2]],
-        [d[0] - c_t[0], d[1] - c_t[1], d[2] - c_t[2]],
-        [d[0] - c_t[0], d[1] - c_t[1], d[2] - c_t[2]],
-    ];
-    let g = [dot(n, e[0]) + shift, dot(t1, e[1]), dot(t2, e[2])];
+    Frame {
+        nf,
+        d,
+        a1,
+        a2,
+        la,
+        l1,
+        cols: [n, t1, t2],
+    }
+}
 
-    // The law: local force fl on the node, ∂fl/∂g, ∂fl/∂λ, and the multiplier rows.
-    let mult = law.has_multipliers();
+/// The law at the gaps: the local force fl on the node, ∂fl/∂g, ∂fl/∂λ, the multiplier
+/// rows and their derivatives, and what it reports.
+struct Local {
+    fl: [f64; 3],
+    dfdg: M3,
+    dfdl: M3,
+    r_l: [f64; 3],
+    k_lg: M3,
+    k_ll: M3,
+    active: bool,
+    sticking: bool,
+    branch: Branch,
+    cone_excess: f64,
+    ft_new: [f64; 3],
+}
+
+fn local_law(
+    g: [f64; 3],
+    lam: [f64; 3],
+    t1: [f64; 3],
+    t2: [f64; 3],
+    law: &PairLaw,
+    decision: Decision,
+) -> Local {
     let mut fl = [0.0; 3];
     let mut dfdg = [[0.0; 3]; 3];
     let mut dfdl = [[0.0; 3]; 3];
@@ -307,17 +338,46 @@ pub fn evaluate(
             }
         }
     }
-    let f: [f64; 3] = std::array::from_fn(|i| (0..3).map(|k| cols[k][i] * fl[k]).sum());
+    Local {
+        fl,
+        dfdg,
+        dfdl,
+        r_l,
+        k_lg,
+        k_ll,
+        active,
+        sticking,
+        branch,
+        cone_excess,
+        ft_new,
+    }
+}
 
+/// The dense Jacobian (`nr` × `nr`, rows and columns as [`PairEval::r`]) and the normal
+/// force's derivatives `dfn` by the pair's unknowns: the gaps `e` (rows: the vectors
+/// projected on n, t1, t2) and the frame differentiated by every position node.
+fn jacobian(
+    fr: &Frame,
+    e: &M3,
+    nn: &[f64],
+    dn: &[[f64; 2]],
+    lo: &Local,
+    law: &PairLaw,
+) -> (Vec<f64>, Vec<f64>) {
+    let nf = fr.nf;
+    let mult = law.has_multipliers();
+    let (cols, fl, dfdg) = (fr.cols, lo.fl, lo.dfdg);
+    let [n, t1, _] = cols;
     // Derivatives of d and the frame columns by each position node: node 0 is the
     // tracked node (∂d = I, frame unchanged), node 1 + a a face node (∂d = −N_a I).
     let np = 1 + nf;
     let nr = 3 * np + if mult { 3 } else { 0 };
     let mut k = vec![0.0; nr * nr];
     let mut dfn = vec![0.0; nr];
-    let pn = projector(n, 1.0 / la);
-    let p1 = projector(t1, 1.0 / l1);
-    let (s1, s2, st1, sn) = (skew(a1), skew(a2), skew(t1), skew(n));
+    let pn = projector(n, 1.0 / fr.la);
+    let p1 = projector(t1, 1.0 / fr.l1);
+    let (s1, s2, st1, sn) = (skew(fr.a1), skew(fr.a2), skew(t1), skew(n));
+    let (k_lg, dfdl, k_ll) = (lo.k_lg, lo.dfdl, lo.k_ll);
     for q in 0..np {
         let (dd, dcols): (f64, [M3; 3]) = if q == 0 {
             (1.0, [[[0.0; 3]; 3]; 3])
@@ -405,6 +465,43 @@ pub fn evaluate(
             dfn[3 * np + j] = dfdl[0][j];
         }
     }
+    (k, dfn)
+}
+
+/// Evaluate one pair: `x[0]` the tracked node, `x[1..]` the reference nodes (current
+/// positions) with their weights `w` in x_m and their shape-function derivatives `dn`
+/// (∂N/∂ξ, ∂N/∂η at the node's point on its face; zero for nodes off that face) that
+/// give the frame; `lam` its multipliers (ignored without); `off` what the gaps are
+/// measured from ([`Offsets`]); `decision` the law's branch choice.
+pub fn evaluate(
+    x: &[[f64; 3]],
+    w: &[f64],
+    dn: &[[f64; 2]],
+    lam: [f64; 3],
+    off: &Offsets,
+    law: &PairLaw,
+    decision: Decision,
+) -> PairEval {
+    let Offsets { c_n, c_t, shift } = *off;
+    let nn = w;
+    let fr = frame(x, nn, dn);
+    let (nf, d, cols) = (fr.nf, fr.d, fr.cols);
+    let [n, t1, t2] = cols;
+    let e = [
+        [d[0] - c_n[0], d[1] - c_n[1], d[2] - c_n[2]],
+        [d[0] - c_t[0], d[1] - c_t[1], d[2] - c_t[2]],
+        [d[0] - c_t[0], d[1] - c_t[1], d[2] - c_t[2]],
+    ];
+    let g = [dot(n, e[0]) + shift, dot(t1, e[1]), dot(t2, e[2])];
+
+    // The law: local force fl on the node, ∂fl/∂g, ∂fl/∂λ, and the multiplier rows.
+    let mult = law.has_multipliers();
+    let lo = local_law(g, lam, t1, t2, law, decision);
+    let (fl, dfdg, k_lg) = (lo.fl, lo.dfdg, lo.k_lg);
+    let f: [f64; 3] = std::array::from_fn(|i| (0..3).map(|k| cols[k][i] * fl[k]).sum());
+    let (k, dfn) = jacobian(&fr, &e, nn, dn, &lo, law);
+    let np = 1 + nf;
+    let nr = 3 * np + if mult { 3 } else { 0 };
     // The shift enters g_N alone: ∂fl/∂s = ∂fl/∂g_N, ∂f/∂s = P ∂fl/∂g_N.
     let df_ds: [f64; 3] = std::array::from_fn(|i| (0..3).map(|kk| cols[kk][i] * dfdg[kk][0]).sum());
     let mut dr_ds = vec![0.0; nr];
@@ -424,7 +521,7 @@ pub fn evaluate(
             r[3 * (1 + a) + i] = nn[a] * f[i];
         }
         if mult {
-            r[3 * np + i] = r_l[i];
+            r[3 * np + i] = lo.r_l[i];
         }
     }
     PairEval {
@@ -433,11 +530,11 @@ pub fn evaluate(
         gap: g[0],
         force: f,
         normal_force: fl[0],
-        active,
-        sticking,
-        branch,
-        cone_excess,
-        ft_new,
+        active: lo.active,
+        sticking: lo.sticking,
+        branch: lo.branch,
+        cone_excess: lo.cone_excess,
+        ft_new: lo.ft_new,
         d,
         frame: cols,
         dr_ds,
@@ -487,6 +584,11 @@ mod tests {
             ([0.45, 0.4, 0.03], [-0.1, 0.0, 0.0]),
         ];
         let c_t = [0.01, -0.02, 0.0];
+        let off = |shift: f64| Offsets {
+            c_n: [0.0; 3],
+            c_t,
+            shift,
+        };
         let mut branches = std::collections::BTreeSet::new();
         for nodes in [&face[..], &tri[..]] {
             let xi = if nodes.len() == 3 {
@@ -499,17 +601,7 @@ mod tests {
                     let mut x = vec![xs];
                     x.extend_from_slice(nodes);
                     let (w, dn) = face_shape(nodes.len(), xi);
-                    let base = evaluate(
-                        &x,
-                        &w,
-                        &dn,
-                        lam,
-                        [0.0; 3],
-                        c_t,
-                        0.01,
-                        law,
-                        Decision::Natural,
-                    );
+                    let base = evaluate(&x, &w, &dn, lam, &off(0.01), law, Decision::Natural);
                     branches.insert(format!("{:?}", base.branch));
                     let forced = Decision::Forced(base.branch);
                     let nr = base.r.len();
@@ -525,7 +617,7 @@ mod tests {
                             } else {
                                 l[j - 3 * np] += s * h;
                             }
-                            evaluate(&y, &w, &dn, l, [0.0; 3], c_t, 0.01, law, forced).r
+                            evaluate(&y, &w, &dn, l, &off(0.01), law, forced).r
                         };
                         let (rp, rm) = (at(1.0), at(-1.0));
                         for i in 0..nr {
@@ -539,8 +631,7 @@ mod tests {
                         nodes.len()
                     );
                     // The shift's column and the normal force's row.
-                    let at_s =
-                        |s: f64| evaluate(&x, &w, &dn, lam, [0.0; 3], c_t, 0.01 + s, law, forced);
+                    let at_s = |s: f64| evaluate(&x, &w, &dn, lam, &off(0.01 + s), law, forced);
                     let (ep, em) = (at_s(h), at_s(-h));
                     for i in 0..nr {
                         let fd = (ep.r[i] - em.r[i]) / (2.0 * h);
@@ -564,10 +655,8 @@ mod tests {
                             l[j - 3 * np] += h;
                             l2[j - 3 * np] -= h;
                         }
-                        let fp =
-                            evaluate(&y, &w, &dn, l, [0.0; 3], c_t, 0.01, law, forced).normal_force;
-                        let fm = evaluate(&y2, &w, &dn, l2, [0.0; 3], c_t, 0.01, law, forced)
-                            .normal_force;
+                        let fp = evaluate(&y, &w, &dn, l, &off(0.01), law, forced).normal_force;
+                        let fm = evaluate(&y2, &w, &dn, l2, &off(0.01), law, forced).normal_force;
                         let fd = (fp - fm) / (2.0 * h);
                         assert!(
                             (fd - base.dfn[j]).abs() <= 1e-7 * scale.max(1.0),
@@ -603,9 +692,11 @@ mod tests {
             &n,
             &dn,
             [0.0; 3],
-            [0.0; 3],
-            [0.0; 3],
-            0.0,
+            &Offsets {
+                c_n: [0.0; 3],
+                c_t: [0.0; 3],
+                shift: 0.0,
+            },
             &PairLaw::TiedPenalty { kp: 1.0 },
             Decision::Natural,
         );
@@ -618,9 +709,11 @@ mod tests {
             &n,
             &dn,
             [0.0; 3],
-            [0.0; 3],
-            [0.0; 3],
-            0.0,
+            &Offsets {
+                c_n: [0.0; 3],
+                c_t: [0.0; 3],
+                shift: 0.0,
+            },
             &PairLaw::Penalty {
                 kp: 10.0,
                 mu: 0.0,

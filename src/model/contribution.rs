@@ -12,9 +12,24 @@
 //!   data only ([`Evaluation`]): it adds into local vectors that hold owned and ghost
 //!   blocks, and the model sums all ghost entries on their owners once, after every
 //!   contribution has been evaluated. Physics never touches MPI;
-//! * **commits** its state when a step has converged;
-//! * **publishes** history columns (reduced over ranks by the model), nodal or element
-//!   fields and moving geometry for the HDF5/XDMF output, and a summary entry.
+//! * **commits** its state when a step has converged (and gives it to, and takes it back
+//!   from, a restart file).
+//!
+//! That is the core, [`Contribution`]. What only some contributions do is a capability
+//! trait, reached through an accessor of the core that returns `None` unless the
+//! contribution has it (`fn outputs(&self) -> Option<&dyn Outputs> { Some(self) }`), so
+//! the model's loops call only the contributions that have it:
+//!
+//! * [`Scaled`]: scales from the reference stiffness (walls, pairs, couplings);
+//! * [`Outputs`]: history columns (reduced over ranks by the model), a summary entry,
+//!   nodal or element fields and moving geometry for the HDF5/XDMF output (solids,
+//!   walls, pairs, couplings);
+//! * [`Dynamics`]: masses, initial velocities and contact persistency (walls: an
+//!   entity's body, contact persistency);
+//! * [`Explicit`]: the check that it can take part in an explicit run and kinematic
+//!   corrections (solids, walls, pairs, couplings: all but walls only refuse);
+//! * [`Recovery`]: a diagnosis after a failed step and adapting before the cut step is
+//!   tried (walls: stick/slip cycling).
 //!
 //! # Adding a kind of contribution
 //!
@@ -32,15 +47,18 @@
 //!    global unknowns; a node-to-face pair would list its node and the face's nodes, and
 //!    the face's nodes become ghosts there), `build` makes the runtime contribution.
 //!    Register it with one line in `def.rs` (`Coupling(super::coupling::CouplingDef)`).
-//! 2. **Runtime**: a struct implementing [`Contribution`]. The coupling declares four
-//!    global blocks (the point's translation and rotation, and their multipliers) owned
-//!    by that rank and read by every rank with coupled nodes ([`Unknowns`]); `bind`
+//! 2. **Runtime**: a struct implementing [`Contribution`] and the capabilities it has.
+//!    The coupling declares four global blocks (the point's translation and rotation,
+//!    and their multipliers) owned by that rank and read by every rank with coupled
+//!    nodes ([`Unknowns`]); `bind`
 //!    learns their global and local blocks; `pattern` lists node–multiplier and
 //!    point–multiplier blocks; `evaluate` adds κCᵢᵀλ to its nodes' rows and κCᵢuᵢ to the
 //!    multiplier rows (partial sums: the ghost summation completes them on the owner),
 //!    and the owner adds the point's rows and its applied load; `prescribed` returns the
-//!    driven DOFs; `columns` publishes `tip.ux … tip.mz`, `summary` a `couplings` entry,
-//!    `grids` the point for ParaView.
+//!    driven DOFs. Its [`Scaled::setup`] takes κ from the mean stiffness; its
+//!    [`Outputs`] are the columns `tip.ux … tip.mz`, a `couplings` summary entry and the
+//!    point as a grid for ParaView; its [`Explicit::start_explicit`] refuses explicit
+//!    runs (the definition's `explicit_ok` says why).
 //! 3. **Deck section**: a `[[couplings]]` table (`scene/deck.rs`) validated in
 //!    `scene/coupling.rs`, which resolves names and curves into the definition; errors
 //!    name the field.
@@ -202,8 +220,12 @@ pub struct GridSpec {
 /// A summary entry: `summary.json[group][name] = value`.
 pub type SummaryEntry = (&'static str, String, serde_json::Value);
 
-/// See the module documentation. Every method but `name` and `evaluate` has a default
-/// for contributions without that aspect.
+/// The core of a contribution (see the module documentation): assembly and state. Every
+/// method but `name` and `evaluate` has a default for contributions without that
+/// aspect; what only some contributions do is a capability trait ([`Scaled`],
+/// [`Outputs`], [`Dynamics`], [`Explicit`], [`Recovery`]) reached through the accessors
+/// at the end, which return `None` by default, so the model's loops call only the
+/// contributions that have it.
 pub trait Contribution {
     /// The deck name (or kind) of this contribution, for messages and outputs.
     fn name(&self) -> &str;
@@ -216,13 +238,6 @@ pub trait Contribution {
     fn bind(&mut self, _dofs: &DofMap, _index: usize) {}
     /// The (row, column) global blocks its Jacobian fills on this rank.
     fn pattern(&self, _dofs: &DofMap, _out: &mut Vec<(usize, usize)>) {}
-
-    /// Whether [`Contribution::setup`] needs the reference stiffness.
-    fn wants_reference(&self) -> bool {
-        false
-    }
-    /// Scales from the reference stiffness (called once, if wanted anywhere).
-    fn setup(&mut self, _r: &Reference) {}
 
     /// Add the residual and/or Jacobian at the state. `Err` says why the state cannot be
     /// evaluated (an inverted element): the model agrees on it across ranks.
@@ -253,20 +268,49 @@ pub trait Contribution {
         }
     }
 
-    /// After a step failed to converge: what this contribution saw go wrong in it, in an
-    /// analyst's words (a wall: nodes that kept switching between stick and slip), or
-    /// `None`.
-    fn diagnose(&self) -> Option<String> {
+    /// Scales from the reference stiffness (contact κ, penalty stiffness), if it has any.
+    fn scaled(&mut self) -> Option<&mut dyn Scaled> {
         None
     }
-
-    /// After a failed attempt, before the cut step is tried: adapt what made it fail (a
-    /// wall softens the stick of nodes that cycled). Returns whether anything changed.
-    /// Must not change the converged answer.
-    fn after_failed_attempt(&mut self) -> bool {
-        false
+    /// History columns, fields, moving geometry and a summary entry, if it publishes any.
+    fn outputs(&self) -> Option<&dyn Outputs> {
+        None
     }
+    /// Masses, initial velocities and contact persistency of dynamic runs, if it has any.
+    fn dynamics(&self) -> Option<&dyn Dynamics> {
+        None
+    }
+    /// Its part in an explicit run (a check, kinematic corrections), if it has one;
+    /// without, it takes part as it is.
+    fn explicit(&mut self) -> Option<&mut dyn Explicit> {
+        None
+    }
+    /// What it says about, and does after, a failed attempt ([`Recovery`]), if anything.
+    fn recovery(&self) -> Option<&dyn Recovery> {
+        None
+    }
+    /// [`Contribution::recovery`], to adapt.
+    fn recovery_mut(&mut self) -> Option<&mut dyn Recovery> {
+        None
+    }
+}
 
+/// A contribution whose scale comes from the mesh: it is set up once from the reference
+/// stiffness, which the model assembles (collectively) only if some contribution on
+/// some rank wants it.
+pub trait Scaled {
+    /// Whether [`Scaled::setup`] needs the reference stiffness (it is called on every
+    /// `Scaled` contribution anyway once the reference exists).
+    fn wants_reference(&self) -> bool {
+        true
+    }
+    /// Scales from the reference stiffness.
+    fn setup(&mut self, r: &Reference);
+}
+
+/// What a contribution publishes: history columns (reduced over ranks by the model), a
+/// summary entry, nodal or element fields and moving geometry for the HDF5/XDMF output.
+pub trait Outputs {
     /// History columns (the same on every rank).
     fn columns(&self) -> Vec<Column> {
         Vec::new()
@@ -296,35 +340,60 @@ pub trait Contribution {
     fn grid_points(&self, _i: usize, _t: f64, _values: &[f64]) -> Vec<[f64; 3]> {
         Vec::new()
     }
+}
 
-    /// An explicit run is starting: contributions that cannot take part say why.
-    fn start_explicit(&mut self) -> Result<(), String> {
-        Ok(())
+/// What a contribution adds to a dynamic run besides its forces.
+pub trait Dynamics {
+    /// The diagonal mass of the unknowns it owns here (owned index, mass; a rigid body's
+    /// translations and rotations). Unknowns without mass stay algebraic.
+    fn masses(&self, _dofs: &DofMap) -> Vec<(usize, f64)> {
+        Vec::new()
     }
-    /// Explicit runs, after the displacement update of a step ending at t (length h):
-    /// kinematic corrections of owned node displacements `u` and mid-step velocities
-    /// `v` (owned vectors; `m` the lumped mass).
-    fn kinematic(
-        &mut self,
-        _coords: &[[f64; 3]],
-        _u: &mut [f64],
-        _v: &mut [f64],
-        _m: &[f64],
-        _t: f64,
-        _h: f64,
-    ) {
+    /// Initial velocities of the unknowns it owns here (owned index, value).
+    fn initial_velocities(&self, _dofs: &DofMap) -> Vec<(usize, f64)> {
+        Vec::new()
     }
     /// Implicit dynamics, after a converged step ending at t: corrections of owned
     /// velocities and accelerations (contact persistency).
     fn persistency(&self, _v: &mut [f64], _a: &mut [f64], _t: f64, _h: f64) {}
+}
 
-    /// Dynamics: the diagonal mass of the unknowns it owns here (owned index, mass; a
-    /// rigid body's translations and rotations). Unknowns without mass stay algebraic.
-    fn masses(&self, _dofs: &DofMap) -> Vec<(usize, f64)> {
-        Vec::new()
+/// A contribution's part in an explicit run.
+pub trait Explicit {
+    /// An explicit run is starting: a contribution that cannot take part says why.
+    fn start_explicit(&mut self) -> Result<(), String> {
+        Ok(())
     }
-    /// Dynamics: initial velocities of the unknowns it owns here (owned index, value).
-    fn initial_velocities(&self, _dofs: &DofMap) -> Vec<(usize, f64)> {
-        Vec::new()
+    /// After the displacement update of a step ending at t (length h): kinematic
+    /// corrections of owned node displacements `u` and mid-step velocities `v` (owned
+    /// vectors; `m` the lumped mass).
+    fn kinematic(&mut self, _k: Kinematic) {}
+}
+
+/// What [`Explicit::kinematic`] corrects, and from what.
+pub struct Kinematic<'a> {
+    /// Reference coordinates of the local nodes.
+    pub coords: &'a [[f64; 3]],
+    pub u: &'a mut [f64],
+    pub v: &'a mut [f64],
+    pub m: &'a [f64],
+    pub t: f64,
+    pub h: f64,
+}
+
+/// What a contribution says about a failed attempt, and how it adapts.
+pub trait Recovery {
+    /// After a step failed to converge: what this contribution saw go wrong in it, in an
+    /// analyst's words (a wall: nodes that kept switching between stick and slip), or
+    /// `None`.
+    fn diagnose(&self) -> Option<String> {
+        None
+    }
+
+    /// After a failed attempt, before the cut step is tried: adapt what made it fail (a
+    /// wall softens the stick of nodes that cycled). Returns whether anything changed.
+    /// Must not change the converged answer.
+    fn after_failed_attempt(&mut self) -> bool {
+        false
     }
 }

@@ -40,7 +40,8 @@
 #![allow(clippy::needless_range_loop)]
 
 use super::contribution::{
-    Column, Contribution, Evaluation, GridSpec, Reference, State, SummaryEntry,
+    Column, Contribution, Evaluation, Explicit, GridSpec, Outputs, Reference, Scaled, State,
+    SummaryEntry,
 };
 use super::dofs::{DofMap, Unknowns};
 use super::kind::{ContributionKind, Localizer};
@@ -191,6 +192,11 @@ impl ContributionKind for CouplingDef {
     fn build(&self, mesh: &LocalMesh, _elements: &LocalElements) -> Box<dyn Contribution> {
         Box::new(Coupling::new(self.clone(), &mesh.coords, mesh.rank))
     }
+}
+
+impl CouplingDef {
+    /// Whether it can take part in an explicit analysis (else why not): the check of
+    /// its runtime's [`Explicit::start_explicit`].
     fn explicit_ok(&self) -> Result<(), String> {
         Err(format!(
             "coupling `{}`: distributing couplings need a static or implicit analysis (the reference point and its constraint carry no mass for the explicit update)",
@@ -280,6 +286,7 @@ impl Contribution for Coupling {
             reads_global: self.owner || !self.def.nodes.is_empty(),
         }
     }
+
     fn bind(&mut self, dofs: &DofMap, index: usize) {
         let first = dofs.placed(index).global_first;
         for k in 0..4 {
@@ -287,6 +294,7 @@ impl Contribution for Coupling {
             self.local[k] = dofs.local_block(first + k);
         }
     }
+
     fn pattern(&self, dofs: &DofMap, out: &mut Vec<(usize, usize)>) {
         let [ut, ur, lt, lr] = self.global;
         for &n in &self.def.nodes {
@@ -307,13 +315,6 @@ impl Contribution for Coupling {
                 (ur, ur),
             ]);
         }
-    }
-
-    fn wants_reference(&self) -> bool {
-        true
-    }
-    fn setup(&mut self, r: &Reference) {
-        self.kappa = r.k_mean.max(f64::MIN_POSITIVE);
     }
 
     fn evaluate(&mut self, ev: &mut Evaluation) -> Result<(), String> {
@@ -398,10 +399,28 @@ impl Contribution for Coupling {
         }
     }
 
-    fn start_explicit(&mut self) -> Result<(), String> {
-        self.def.explicit_ok()
+    fn scaled(&mut self) -> Option<&mut dyn Scaled> {
+        Some(self)
+    }
+    fn outputs(&self) -> Option<&dyn Outputs> {
+        Some(self)
+    }
+    fn explicit(&mut self) -> Option<&mut dyn Explicit> {
+        Some(self)
+    }
+}
+
+impl Scaled for Coupling {
+    fn wants_reference(&self) -> bool {
+        true
     }
 
+    fn setup(&mut self, r: &Reference) {
+        self.kappa = r.k_mean.max(f64::MIN_POSITIVE);
+    }
+}
+
+impl Outputs for Coupling {
     /// `<name>.ux … .rz`: the reference point's displacement and rotation (radians);
     /// `<name>.fx … .mz`: the force and moment it transmits to the part, −κλ: the
     /// applied load on free DOFs, the reaction on prescribed ones.
@@ -412,6 +431,7 @@ impl Contribution for Coupling {
             .map(|c| Column::sum(format!("{}.{c}", self.def.name)))
             .collect()
     }
+
     fn column_values(&self, s: &State, out: &mut [f64]) {
         if !self.owner {
             return;
@@ -427,6 +447,7 @@ impl Contribution for Coupling {
             out[9 + a] = -self.kappa * lam[1][a] * l + 0.0;
         }
     }
+
     fn summary(&self, v: &[f64]) -> Option<SummaryEntry> {
         let g = |a: usize| [v[a], v[a + 1], v[a + 2]];
         Some((
@@ -449,9 +470,16 @@ impl Contribution for Coupling {
             paths: false,
         }]
     }
+
     fn grid_points(&self, _i: usize, _t: f64, v: &[f64]) -> Vec<[f64; 3]> {
         let p = self.def.point;
         vec![[p[0] + v[0], p[1] + v[1], p[2] + v[2]]]
+    }
+}
+
+impl Explicit for Coupling {
+    fn start_explicit(&mut self) -> Result<(), String> {
+        self.def.explicit_ok()
     }
 }
 

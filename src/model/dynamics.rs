@@ -78,7 +78,10 @@ impl Model {
 
     /// The contributions' own masses (a rigid body's): (owned index, mass).
     pub fn extra_masses(&self) -> Vec<(usize, f64)> {
-        self.each_ref().flat_map(|c| c.masses(&self.dofs)).collect()
+        self.each_ref()
+            .filter_map(|c| c.dynamics())
+            .flat_map(|d| d.masses(&self.dofs))
+            .collect()
     }
 
     /// The owned unknowns without mass that are not node displacements (multipliers,
@@ -294,8 +297,8 @@ impl Model {
                 }
             }
         }
-        for c in self.each_ref() {
-            for (i, vi) in c.initial_velocities(&self.dofs) {
+        for d in self.each_ref().filter_map(|c| c.dynamics()) {
+            for (i, vi) in d.initial_velocities(&self.dofs) {
                 v[i] = vi;
             }
         }

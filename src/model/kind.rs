@@ -58,10 +58,6 @@ pub trait ContributionKind {
         Self: Sized;
     /// The runtime contribution on this rank, from its localized definition.
     fn build(&self, mesh: &LocalMesh, elements: &LocalElements) -> Box<dyn Contribution>;
-    /// Whether it can take part in an explicit analysis (else why not).
-    fn explicit_ok(&self) -> Result<(), String> {
-        Ok(())
-    }
     /// `--contact alm|penalty`: switch its enforcement, if it has one.
     fn set_contact_method(&mut self, _m: ContactMethod) {}
 }

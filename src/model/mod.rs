@@ -23,7 +23,9 @@ pub mod walls;
 
 pub use contribution::Contribution;
 
-use contribution::{Column, Evaluation, FieldSpec, GridSpec, Reduce, Reference, State};
+use contribution::{
+    Column, Evaluation, FieldSpec, GridSpec, Kinematic, Outputs, Reduce, Reference, State,
+};
 use def::Constraint;
 use distribute::{LocalMesh, LocalModel};
 use dofs::DofMap;
@@ -152,7 +154,10 @@ impl Model {
         }
         model.merge_columns();
         model.prescribed_dofs = model.prescribed(0.0).into_iter().map(|p| p.0).collect();
-        let wants = model.contributions.iter().any(|c| c.wants_reference());
+        let wants = model
+            .contributions
+            .iter_mut()
+            .any(|c| c.scaled().is_some_and(|s| s.wants_reference()));
         if !comm.all_ok(!wants) {
             model.set_reference(comm);
         }
@@ -162,7 +167,10 @@ impl Model {
     /// The contributions' history columns in output order: each contribution's own
     /// columns in list order, then the shared ones (merged by name).
     fn merge_columns(&mut self) {
-        let declared: Vec<Vec<Column>> = self.each_ref().map(|c| c.columns()).collect();
+        let declared: Vec<Vec<Column>> = self
+            .each_ref()
+            .map(|c| c.outputs().map_or_else(Vec::new, |o| o.columns()))
+            .collect();
         let mut columns: Vec<Column> = declared
             .iter()
             .flatten()
@@ -209,6 +217,12 @@ impl Model {
             .chain(self.contributions.iter().map(|c| c.as_ref()))
     }
 
+    /// Every contribution's outputs, in the order of [`Model::each_ref`] (`None` for one
+    /// that publishes nothing).
+    fn outputs(&self) -> impl Iterator<Item = Option<&dyn Outputs>> + '_ {
+        self.each_ref().map(|c| c.outputs())
+    }
+
     /// Collective: the reference stiffness (the solid elements' tangent at u = 0, one
     /// assembly) and what it says about each node, for the contributions that scale
     /// with the mesh.
@@ -248,8 +262,8 @@ impl Model {
             e_factor: &factor,
             k_mean: sum[0] / sum[1].max(1.0),
         };
-        for c in self.contributions.iter_mut() {
-            c.setup(&r);
+        for s in self.contributions.iter_mut().filter_map(|c| c.scaled()) {
+            s.setup(&r);
         }
     }
 
@@ -485,15 +499,18 @@ impl Model {
     /// Collective, after a failed step: the first contribution diagnosis on the lowest
     /// rank that has one (the same text on every rank).
     pub fn diagnose(&self, comm: &dyn Comm) -> Option<String> {
-        let mine: Vec<String> = self.each_ref().filter_map(|c| c.diagnose()).collect();
+        let mine: Vec<String> = self
+            .each_ref()
+            .filter_map(|c| c.recovery()?.diagnose())
+            .collect();
         comm.first_message((!mine.is_empty()).then(|| mine.join("; ")))
     }
 
     /// After a failed attempt: each contribution adapts (see
-    /// [`Contribution::after_failed_attempt`]); local, no communication.
+    /// [`contribution::Recovery::after_failed_attempt`]); local, no communication.
     pub fn after_failed_attempt(&mut self) {
-        for c in self.each() {
-            c.after_failed_attempt();
+        for r in self.each().filter_map(|c| c.recovery_mut()) {
+            r.after_failed_attempt();
         }
     }
 
@@ -532,8 +549,10 @@ impl Model {
     pub fn start_explicit(&mut self) -> Result<()> {
         for c in self.each() {
             let name = c.name().to_string();
-            c.start_explicit()
-                .map_err(|why| Error::input(format!("{name}: {why}")))?;
+            if let Some(x) = c.explicit() {
+                x.start_explicit()
+                    .map_err(|why| Error::input(format!("{name}: {why}")))?;
+            }
         }
         Ok(())
     }
@@ -542,16 +561,23 @@ impl Model {
     /// vectors; `v` the mid-step velocity, `m` the lumped mass).
     pub fn kinematic(&mut self, u: &mut [f64], v: &mut [f64], m: &[f64], t: f64, h: f64) {
         let coords = &self.mesh.coords;
-        for c in self.contributions.iter_mut() {
-            c.kinematic(coords, u, v, m, t, h);
+        for x in self.contributions.iter_mut().filter_map(|c| c.explicit()) {
+            x.kinematic(Kinematic {
+                coords,
+                u: &mut *u,
+                v: &mut *v,
+                m,
+                t,
+                h,
+            });
         }
     }
 
     /// Implicit dynamics after a converged step: velocity and acceleration corrections
     /// (contact persistency; owned dofs, no communication).
     pub fn persistency(&self, v: &mut [f64], a: &mut [f64], t: f64, h: f64) {
-        for c in self.each_ref() {
-            c.persistency(v, a, t, h);
+        for d in self.each_ref().filter_map(|c| c.dynamics()) {
+            d.persistency(v, a, t, h);
         }
     }
 
@@ -588,10 +614,10 @@ impl Model {
         let s = self.state(comm, u_owned, t, &mut u_local);
         let mut values = vec![0.0; self.columns.len()];
         let mut seen = vec![false; self.columns.len()];
-        for (c, map) in self.each_ref().zip(&self.column_map) {
-            if map.is_empty() {
+        for (c, map) in self.outputs().zip(&self.column_map) {
+            let Some(c) = c.filter(|_| !map.is_empty()) else {
                 continue;
-            }
+            };
             let mut mine = vec![0.0; map.len()];
             c.column_values(&s, &mut mine);
             for (&i, v) in map.iter().zip(mine) {
@@ -631,7 +657,8 @@ impl Model {
     /// last step: `{group: {name: value}}`.
     pub fn summary(&self, values: &[f64]) -> BTreeMap<String, serde_json::Value> {
         let mut out: BTreeMap<String, serde_json::Map<String, serde_json::Value>> = BTreeMap::new();
-        for (c, map) in self.each_ref().zip(&self.column_map) {
+        for (c, map) in self.outputs().zip(&self.column_map) {
+            let Some(c) = c else { continue };
             let mine: Vec<f64> = map
                 .iter()
                 .map(|&i| values.get(i).copied().unwrap_or(f64::NAN))
@@ -656,7 +683,7 @@ impl Model {
             contribution::Center::Cell => self.solids.len(),
         };
         let mut out: Vec<Field> = Vec::new();
-        for c in self.each_ref() {
+        for c in self.outputs().flatten() {
             let specs = c.fields();
             if specs.is_empty() {
                 continue;
@@ -705,13 +732,14 @@ impl Model {
 
     /// The contributions' moving geometry.
     pub fn grids(&self) -> Vec<GridSpec> {
-        self.each_ref().flat_map(|c| c.grids()).collect()
+        self.outputs().flatten().flat_map(|c| c.grids()).collect()
     }
 
     /// The points of every grid at time t, from the reduced column values of that step.
     pub fn grid_points(&self, t: f64, values: &[f64]) -> Vec<Vec<[f64; 3]>> {
         let mut out = Vec::new();
-        for (c, map) in self.each_ref().zip(&self.column_map) {
+        for (c, map) in self.outputs().zip(&self.column_map) {
+            let Some(c) = c else { continue };
             let mine: Vec<f64> = map
                 .iter()
                 .map(|&i| values.get(i).copied().unwrap_or(f64::NAN))

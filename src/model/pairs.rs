@@ -9,14 +9,14 @@
 #![allow(clippy::needless_range_loop)]
 
 use super::contribution::{
-    Center, Column, Combine, Contribution, Evaluation, FieldSpec, Reduce, Reference, State,
-    SummaryEntry,
+    Center, Column, Combine, Contribution, Evaluation, Explicit, FieldSpec, Outputs, Reduce,
+    Reference, Scaled, State, SummaryEntry,
 };
 use super::dofs::{DofMap, Unknowns};
 use super::kind::{ContributionKind, Localizer};
 use super::local::{LocalElements, LocalMesh};
 use crate::contact::law::{AlmLaw, Branch, Decision, Threshold};
-use crate::contact::pair::{evaluate, PairLaw};
+use crate::contact::pair::{evaluate, Offsets, PairLaw};
 use crate::contact::wall::ContactMethod;
 use crate::curve::Curve;
 use serde::{Deserialize, Serialize};
@@ -166,18 +166,23 @@ impl ContributionKind for PairsDef {
     fn build(&self, _mesh: &LocalMesh, _elements: &LocalElements) -> Box<dyn Contribution> {
         Box::new(Pairs::new(self.clone()))
     }
-    fn explicit_ok(&self) -> Result<(), String> {
-        Err(format!(
-            "pairs `{}`: small-sliding pairs take part in static analyses and implicit dynamics",
-            self.name
-        ))
-    }
     /// Switches a contact's enforcement; a bolt's section stays ALM (a penalty tie
     /// lets the section creep: 6 % on `tests/bolt-bar.toml`).
     fn set_contact_method(&mut self, m: ContactMethod) {
         if self.pretension.is_none() {
             self.method = m;
         }
+    }
+}
+
+impl PairsDef {
+    /// Whether it can take part in an explicit analysis (else why not): the check of
+    /// its runtime's [`Explicit::start_explicit`].
+    fn explicit_ok(&self) -> Result<(), String> {
+        Err(format!(
+            "pairs `{}`: small-sliding pairs take part in static analyses and implicit dynamics",
+            self.name
+        ))
     }
 }
 
@@ -291,9 +296,11 @@ impl Pairs {
                 &p.w,
                 &p.dn,
                 [0.0; 3],
-                [0.0; 3],
-                [0.0; 3],
-                0.0,
+                &Offsets {
+                    c_n: [0.0; 3],
+                    c_t: [0.0; 3],
+                    shift: 0.0,
+                },
                 &PairLaw::TiedPenalty { kp: 0.0 },
                 Decision::Natural,
             );
@@ -317,6 +324,7 @@ impl Contribution for Pairs {
     fn name(&self) -> &str {
         &self.def.name
     }
+
     /// ALM (tied or not): three multipliers per pair, owned with its tracked node.
     fn unknowns(&self) -> Unknowns {
         let owned = if self.is_alm() {
@@ -337,6 +345,7 @@ impl Contribution for Pairs {
             },
         }
     }
+
     fn bind(&mut self, dofs: &DofMap, index: usize) {
         let placed = dofs.placed(index);
         if self.is_alm() {
@@ -350,6 +359,7 @@ impl Contribution for Pairs {
             self.s_owner = dofs.owned_index(3 * self.s_block.unwrap_or(0)).is_some();
         }
     }
+
     fn pattern(&self, dofs: &DofMap, out: &mut Vec<(usize, usize)>) {
         for (j, p) in self.def.pairs.iter().enumerate() {
             let mut blocks: Vec<usize> = std::iter::once(p.node)
@@ -389,21 +399,6 @@ impl Contribution for Pairs {
         out.extend_from_slice(&[(i + 1, 0.0), (i + 2, 0.0)]);
         if let Some(s) = self.s_lock {
             out.push((i, s));
-        }
-    }
-
-    fn wants_reference(&self) -> bool {
-        !self.def.pairs.is_empty()
-    }
-    /// κ and the penalty stiffness from the tracked node's stiffness, as for walls (see
-    /// [`super::walls`]): κ scaled from the P-wave modulus down to Young's modulus.
-    fn setup(&mut self, r: &Reference) {
-        for (j, p) in self.def.pairs.iter().enumerate() {
-            let (k, kappa) = r.contact_scales(p.node);
-            self.k_node[j] = k;
-            if self.def.kappa.is_none() {
-                self.kappa[j] = kappa;
-            }
         }
     }
 
@@ -454,7 +449,15 @@ impl Contribution for Pairs {
             };
             let law = self.law(j);
             let p = &self.def.pairs[j];
-            let e = evaluate(&x, &p.w, &p.dn, lam, c_n, c_t, s, &law, decision);
+            let e = evaluate(
+                &x,
+                &p.w,
+                &p.dn,
+                lam,
+                &Offsets { c_n, c_t, shift: s },
+                &law,
+                decision,
+            );
             let nodes: Vec<usize> = std::iter::once(p.node)
                 .chain(p.nodes.iter().copied())
                 .collect();
@@ -576,6 +579,44 @@ impl Contribution for Pairs {
         }
     }
 
+    fn scaled(&mut self) -> Option<&mut dyn Scaled> {
+        Some(self)
+    }
+    fn outputs(&self) -> Option<&dyn Outputs> {
+        Some(self)
+    }
+    fn explicit(&mut self) -> Option<&mut dyn Explicit> {
+        Some(self)
+    }
+}
+
+impl Explicit for Pairs {
+    /// Small-sliding pairs take no part in explicit runs (their multipliers carry no
+    /// mass); the deck does not refuse the combination, so this does.
+    fn start_explicit(&mut self) -> Result<(), String> {
+        self.def.explicit_ok()
+    }
+}
+
+impl Scaled for Pairs {
+    fn wants_reference(&self) -> bool {
+        !self.def.pairs.is_empty()
+    }
+
+    /// κ and the penalty stiffness from the tracked node's stiffness, as for walls (see
+    /// [`super::walls`]): κ scaled from the P-wave modulus down to Young's modulus.
+    fn setup(&mut self, r: &Reference) {
+        for (j, p) in self.def.pairs.iter().enumerate() {
+            let (k, kappa) = r.contact_scales(p.node);
+            self.k_node[j] = k;
+            if self.def.kappa.is_none() {
+                self.kappa[j] = kappa;
+            }
+        }
+    }
+}
+
+impl Outputs for Pairs {
     /// `<pairs>.fx/.fy/.fz`: the force on the tracked side (its reaction on the
     /// reference side is opposite), `<pairs>.active`, `<pairs>.max_slip` (the largest
     /// tangential relative displacement since the start), and the shared `max_penetration`,
@@ -615,6 +656,7 @@ impl Contribution for Pairs {
         }
         c
     }
+
     fn column_values(&self, _s: &State, out: &mut [f64]) {
         let own = self.n_own_columns();
         let bolt = self.def.pretension.is_some();
@@ -641,6 +683,7 @@ impl Contribution for Pairs {
             }
         }
     }
+
     fn summary(&self, values: &[f64]) -> Option<SummaryEntry> {
         let mut v = serde_json::json!({
             "force": [values[0], values[1], values[2]],
@@ -671,6 +714,7 @@ impl Contribution for Pairs {
             node("contact_force", 3, Combine::Sum, 0.0),
         ]
     }
+
     fn field_values(&self, _s: &State, out: &mut [Vec<f64>]) {
         for (p, c) in self.def.pairs.iter().zip(&self.last) {
             let n = p.node;

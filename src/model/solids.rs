@@ -4,7 +4,7 @@
 //! for what only elements have: mass, the explicit stable step, the mesh for output.
 
 use super::contribution::{
-    Center, Column, Combine, Contribution, Evaluation, FieldSpec, Reduce, State,
+    Center, Column, Combine, Contribution, Evaluation, Explicit, FieldSpec, Outputs, Reduce, State,
 };
 use super::def::MaterialDef;
 use super::distribute::LocalElements;
@@ -403,15 +403,15 @@ impl Contribution for Solids {
         Ok(())
     }
 
-    /// Pressure unknowns are algebraic: an explicit step cannot solve for them (the deck
-    /// refuses the combination; this is the backstop).
-    fn start_explicit(&mut self) -> Result<(), String> {
-        if self.n_hybrid() > 0 {
-            return Err("hybrid elements need a static or implicit analysis".into());
-        }
-        Ok(())
+    fn outputs(&self) -> Option<&dyn Outputs> {
+        Some(self)
     }
+    fn explicit(&mut self) -> Option<&mut dyn Explicit> {
+        Some(self)
+    }
+}
 
+impl Outputs for Solids {
     fn columns(&self) -> Vec<Column> {
         self.peak_stress_parts
             .iter()
@@ -464,5 +464,16 @@ impl Contribution for Solids {
         if out.len() > 2 {
             out[2].copy_from_slice(&self.plastic_strains());
         }
+    }
+}
+
+impl Explicit for Solids {
+    /// Pressure unknowns are algebraic: an explicit step cannot solve for them (the deck
+    /// refuses the combination; this is the backstop).
+    fn start_explicit(&mut self) -> Result<(), String> {
+        if self.n_hybrid() > 0 {
+            return Err("hybrid elements need a static or implicit analysis".into());
+        }
+        Ok(())
     }
 }

@@ -18,8 +18,8 @@ mod node;
 
 use super::body::{BodyDef, Contact};
 use super::contribution::{
-    Center, Column, Combine, Contribution, Evaluation, FieldSpec, GridSpec, Reduce, Reference,
-    State, SummaryEntry,
+    Center, Column, Combine, Contribution, Dynamics, Evaluation, Explicit, FieldSpec, GridSpec,
+    Kinematic, Outputs, Recovery, Reduce, Reference, Scaled, State, SummaryEntry,
 };
 use super::dofs::{DofMap, Unknowns};
 use super::kind::{ContributionKind, Localizer};
@@ -139,6 +139,14 @@ impl ContributionKind for WallDef {
     fn build(&self, mesh: &LocalMesh, _elements: &LocalElements) -> Box<dyn Contribution> {
         Box::new(Wall::new(self.clone(), &mesh.coords, mesh.rank))
     }
+    fn set_contact_method(&mut self, m: ContactMethod) {
+        self.method = m;
+    }
+}
+
+impl WallDef {
+    /// Whether it can take part in an explicit analysis (else why not): the check of
+    /// its runtime's [`Explicit::start_explicit`].
     fn explicit_ok(&self) -> Result<(), String> {
         match &self.body {
             Some(_) => Err(format!(
@@ -147,9 +155,6 @@ impl ContributionKind for WallDef {
             )),
             None => Ok(()),
         }
-    }
-    fn set_contact_method(&mut self, m: ContactMethod) {
-        self.method = m;
     }
 }
 
@@ -183,6 +188,7 @@ impl Contribution for Wall {
             },
         }
     }
+
     fn bind(&mut self, dofs: &DofMap, index: usize) {
         let placed = dofs.placed(index);
         if self.is_alm() {
@@ -192,6 +198,7 @@ impl Contribution for Wall {
             b.bind(dofs, placed.global_first);
         }
     }
+
     fn pattern(&self, dofs: &DofMap, out: &mut Vec<(usize, usize)>) {
         for (j, &n) in self.def.nodes.iter().enumerate() {
             let a = dofs.global_block(n);
@@ -206,29 +213,6 @@ impl Contribution for Wall {
         }
         if let Some(b) = &self.body {
             b.own_pattern(!self.def.nodes.is_empty(), out);
-        }
-    }
-
-    fn wants_reference(&self) -> bool {
-        !self.def.nodes.is_empty() || self.body.is_some()
-    }
-    /// The nodal stiffness of every tracked node from the reference stiffness: the
-    /// penalty stiffness is `penalty_scale` times the diagonal (bulk-dominated, as
-    /// LS-DYNA's k = f K A²/V). κ of ALM (without a deck value) is the diagonal scaled
-    /// from the P-wave modulus λ + 2μ that dominates it down to Young's modulus E: κ is
-    /// the friction law's augmentation parameter (γ compares λ_T with the slip g_T);
-    /// Alart–Curnier-type semi-smooth Newton wants it of the order of E·h, and a
-    /// bulk-dominated κ (rubber: K/G ~ 1000) made the stick/slip decisions cycle.
-    fn setup(&mut self, r: &Reference) {
-        if let Some(b) = &mut self.body {
-            b.set_kappa(r.k_mean.max(f64::MIN_POSITIVE));
-        }
-        for (j, &n) in self.def.nodes.iter().enumerate() {
-            let (k, kappa) = r.contact_scales(n);
-            self.k_node[j] = k;
-            if self.def.kappa.is_none() {
-                self.kappa[j] = kappa;
-            }
         }
     }
 
@@ -327,16 +311,6 @@ impl Contribution for Wall {
         }
     }
 
-    fn masses(&self, dofs: &DofMap) -> Vec<(usize, f64)> {
-        self.body.as_ref().map_or(Vec::new(), |b| b.masses(dofs))
-    }
-
-    fn initial_velocities(&self, dofs: &DofMap) -> Vec<(usize, f64)> {
-        self.body
-            .as_ref()
-            .map_or(Vec::new(), |b| b.initial_velocities(dofs))
-    }
-
     /// `[t_old, x_old (3 n), n_old (4 n: present, normal), ft_old (3 n), body (15)]`.
     fn saved_state(&self) -> Vec<f64> {
         let mut s = vec![self.t_old];
@@ -388,46 +362,6 @@ impl Contribution for Wall {
         Ok(())
     }
 
-    /// Stick/slip cycling: nodes that switched between stick and slip at least
-    /// [`CYCLING_FLIPS`] times since the step began.
-    fn diagnose(&self) -> Option<String> {
-        let cycling: Vec<usize> = (0..self.flips.len())
-            .filter(|&j| self.flips[j] >= CYCLING_FLIPS)
-            .collect();
-        let worst = *cycling.iter().max_by_key(|&&j| self.flips[j])?;
-        let x = self.x_new[worst];
-        Some(format!(
-            "stick/slip cycling at {} `{}`: {} node(s) switched between stick and slip {CYCLING_FLIPS} or more times in this step, one {} times at ({:.4e}, {:.4e}, {:.4e})",
-            if self.body.is_some() { "entity" } else { "wall" },
-            self.def.name,
-            cycling.len(),
-            self.flips[worst],
-            x[0],
-            x[1],
-            x[2]
-        ))
-    }
-
-    /// A node that cycled between stick and slip in the failed attempt gets a softer
-    /// tangential augmentation (α × 0.3, at most twice): a stiff stick spring over-shoots
-    /// the cone from one iterate to the next on a fine mesh (issue 17's study: the refined
-    /// `sliding-block` failed its first step at α = 1 and finishes at 0.3; a lower α on
-    /// every node costs 12 % more iterations on `rubber-indent`, so only the cycling
-    /// nodes get it). α does not change the converged answer: h = 0 is the Coulomb law.
-    fn after_failed_attempt(&mut self) -> bool {
-        if !self.has_cone() {
-            return false;
-        }
-        let mut changed = false;
-        for j in 0..self.flips.len() {
-            if self.flips[j] >= CYCLING_FLIPS && self.alpha_scale[j] > ALPHA_FLOOR {
-                self.alpha_scale[j] = (self.alpha_scale[j] * ALPHA_CUT).max(ALPHA_FLOOR);
-                changed = true;
-            }
-        }
-        changed
-    }
-
     fn commit(&mut self) {
         if let Some(b) = &mut self.body {
             b.commit();
@@ -439,6 +373,53 @@ impl Contribution for Wall {
         self.n_old.copy_from_slice(&self.n_new);
     }
 
+    fn scaled(&mut self) -> Option<&mut dyn Scaled> {
+        Some(self)
+    }
+    fn outputs(&self) -> Option<&dyn Outputs> {
+        Some(self)
+    }
+    fn dynamics(&self) -> Option<&dyn Dynamics> {
+        Some(self)
+    }
+    fn explicit(&mut self) -> Option<&mut dyn Explicit> {
+        Some(self)
+    }
+    fn recovery(&self) -> Option<&dyn Recovery> {
+        Some(self)
+    }
+    fn recovery_mut(&mut self) -> Option<&mut dyn Recovery> {
+        Some(self)
+    }
+}
+
+impl Scaled for Wall {
+    fn wants_reference(&self) -> bool {
+        !self.def.nodes.is_empty() || self.body.is_some()
+    }
+
+    /// The nodal stiffness of every tracked node from the reference stiffness: the
+    /// penalty stiffness is `penalty_scale` times the diagonal (bulk-dominated, as
+    /// LS-DYNA's k = f K A²/V). κ of ALM (without a deck value) is the diagonal scaled
+    /// from the P-wave modulus λ + 2μ that dominates it down to Young's modulus E: κ is
+    /// the friction law's augmentation parameter (γ compares λ_T with the slip g_T);
+    /// Alart–Curnier-type semi-smooth Newton wants it of the order of E·h, and a
+    /// bulk-dominated κ (rubber: K/G ~ 1000) made the stick/slip decisions cycle.
+    fn setup(&mut self, r: &Reference) {
+        if let Some(b) = &mut self.body {
+            b.set_kappa(r.k_mean.max(f64::MIN_POSITIVE));
+        }
+        for (j, &n) in self.def.nodes.iter().enumerate() {
+            let (k, kappa) = r.contact_scales(n);
+            self.k_node[j] = k;
+            if self.def.kappa.is_none() {
+                self.kappa[j] = kappa;
+            }
+        }
+    }
+}
+
+impl Outputs for Wall {
     /// `<wall>.fx … .mz`: force and moment on the wall (about its current origin) at the
     /// last evaluation, `<wall>.ux … .uz` its prescribed displacement and `.rx … .rz` its
     /// rotation vector; shared:
@@ -490,6 +471,7 @@ impl Contribution for Wall {
         }
         c
     }
+
     fn column_values(&self, _s: &State, out: &mut [f64]) {
         let origin = self.pose_now().origin;
         for (j, nc) in self.last.iter().enumerate() {
@@ -532,6 +514,7 @@ impl Contribution for Wall {
             }
         }
     }
+
     fn summary(&self, values: &[f64]) -> Option<SummaryEntry> {
         let v = |a: usize| [values[a], values[a + 1], values[a + 2]];
         Some((
@@ -569,6 +552,7 @@ impl Contribution for Wall {
             node("contact_lambda", 3, Combine::First, 0.0),
         ]
     }
+
     fn field_values(&self, _s: &State, out: &mut [Vec<f64>]) {
         for (j, (&n, c)) in self.def.nodes.iter().zip(&self.last).enumerate() {
             out[0][n] = c.gap;
@@ -630,6 +614,7 @@ impl Contribution for Wall {
         }
         g
     }
+
     fn grid_points(&self, i: usize, t: f64, _values: &[f64]) -> Vec<[f64; 3]> {
         let pose = match &self.body {
             Some(b) if i == 1 => return b.def.trace.iter().map(|p| b.point(p.1)).collect(),
@@ -643,7 +628,54 @@ impl Contribution for Wall {
             .map(|&p| pose.to_global(p))
             .collect()
     }
+}
 
+impl Dynamics for Wall {
+    fn masses(&self, dofs: &DofMap) -> Vec<(usize, f64)> {
+        self.body.as_ref().map_or(Vec::new(), |b| b.masses(dofs))
+    }
+
+    fn initial_velocities(&self, dofs: &DofMap) -> Vec<(usize, f64)> {
+        self.body
+            .as_ref()
+            .map_or(Vec::new(), |b| b.initial_velocities(dofs))
+    }
+
+    /// Persistency of contact in implicit dynamics (Laursen & Chawla 1997): for each
+    /// node in contact at the last evaluation (active, pressed: normal force > 0), the
+    /// normal component of its velocity relative to the wall is set to zero and its
+    /// normal acceleration to the wall's (zero for walls moving at constant speed). The
+    /// impact's normal kinetic energy of these nodes is dissipated, as in a perfectly
+    /// inelastic node-wall impact.
+    ///
+    /// An entity's surface moves with its body: from its committed pose to the
+    /// converged one.
+    fn persistency(&self, v: &mut [f64], a: &mut [f64], t: f64, h: f64) {
+        let (pose, pose_old) = match &self.body {
+            Some(b) => (b.pose_new(), b.pose_old()),
+            None => (self.def.motion.pose(t), self.def.motion.pose(t - h)),
+        };
+        for (j, &n) in self.def.nodes.iter().enumerate() {
+            let c = &self.last[j];
+            if !(c.active && c.normal_force > 0.0) {
+                continue;
+            }
+            let Some(nrm) = self.n_new[j] else { continue };
+            let x = self.x_new[j];
+            let before = pose_old.to_global(pose.to_local(x));
+            let vn: f64 = (0..3)
+                .map(|i| (v[3 * n + i] - (x[i] - before[i]) / h) * nrm[i])
+                .sum();
+            let an: f64 = (0..3).map(|i| a[3 * n + i] * nrm[i]).sum();
+            for i in 0..3 {
+                v[3 * n + i] -= vn * nrm[i];
+                a[3 * n + i] -= an * nrm[i];
+            }
+        }
+    }
+}
+
+impl Explicit for Wall {
     fn start_explicit(&mut self) -> Result<(), String> {
         self.def.explicit_ok()?;
         self.explicit = true;
@@ -656,15 +688,15 @@ impl Contribution for Wall {
     /// relative to the wall is set to zero if it approaches; with friction the
     /// tangential relative velocity is reduced by at most μ times the normal velocity
     /// jump (Coulomb on impulses). The force on the node is reported as m Δv / h.
-    fn kinematic(
-        &mut self,
-        coords: &[[f64; 3]],
-        u: &mut [f64],
-        v: &mut [f64],
-        m: &[f64],
-        t: f64,
-        h: f64,
-    ) {
+    fn kinematic(&mut self, k: Kinematic) {
+        let Kinematic {
+            coords,
+            u,
+            v,
+            m,
+            t,
+            h,
+        } = k;
         self.t_new = t;
         if !self.is_alm() {
             return;
@@ -722,38 +754,47 @@ impl Contribution for Wall {
             self.last[j] = c;
         }
     }
+}
 
-    /// Persistency of contact in implicit dynamics (Laursen & Chawla 1997): for each
-    /// node in contact at the last evaluation (active, pressed: normal force > 0), the
-    /// normal component of its velocity relative to the wall is set to zero and its
-    /// normal acceleration to the wall's (zero for walls moving at constant speed). The
-    /// impact's normal kinetic energy of these nodes is dissipated, as in a perfectly
-    /// inelastic node-wall impact.
-    ///
-    /// An entity's surface moves with its body: from its committed pose to the
-    /// converged one.
-    fn persistency(&self, v: &mut [f64], a: &mut [f64], t: f64, h: f64) {
-        let (pose, pose_old) = match &self.body {
-            Some(b) => (b.pose_new(), b.pose_old()),
-            None => (self.def.motion.pose(t), self.def.motion.pose(t - h)),
-        };
-        for (j, &n) in self.def.nodes.iter().enumerate() {
-            let c = &self.last[j];
-            if !(c.active && c.normal_force > 0.0) {
-                continue;
-            }
-            let Some(nrm) = self.n_new[j] else { continue };
-            let x = self.x_new[j];
-            let before = pose_old.to_global(pose.to_local(x));
-            let vn: f64 = (0..3)
-                .map(|i| (v[3 * n + i] - (x[i] - before[i]) / h) * nrm[i])
-                .sum();
-            let an: f64 = (0..3).map(|i| a[3 * n + i] * nrm[i]).sum();
-            for i in 0..3 {
-                v[3 * n + i] -= vn * nrm[i];
-                a[3 * n + i] -= an * nrm[i];
+impl Recovery for Wall {
+    /// Stick/slip cycling: nodes that switched between stick and slip at least
+    /// [`CYCLING_FLIPS`] times since the step began.
+    fn diagnose(&self) -> Option<String> {
+        let cycling: Vec<usize> = (0..self.flips.len())
+            .filter(|&j| self.flips[j] >= CYCLING_FLIPS)
+            .collect();
+        let worst = *cycling.iter().max_by_key(|&&j| self.flips[j])?;
+        let x = self.x_new[worst];
+        Some(format!(
+            "stick/slip cycling at {} `{}`: {} node(s) switched between stick and slip {CYCLING_FLIPS} or more times in this step, one {} times at ({:.4e}, {:.4e}, {:.4e})",
+            if self.body.is_some() { "entity" } else { "wall" },
+            self.def.name,
+            cycling.len(),
+            self.flips[worst],
+            x[0],
+            x[1],
+            x[2]
+        ))
+    }
+
+    /// A node that cycled between stick and slip in the failed attempt gets a softer
+    /// tangential augmentation (α × 0.3, at most twice): a stiff stick spring over-shoots
+    /// the cone from one iterate to the next on a fine mesh (issue 17's study: the refined
+    /// `sliding-block` failed its first step at α = 1 and finishes at 0.3; a lower α on
+    /// every node costs 12 % more iterations on `rubber-indent`, so only the cycling
+    /// nodes get it). α does not change the converged answer: h = 0 is the Coulomb law.
+    fn after_failed_attempt(&mut self) -> bool {
+        if !self.has_cone() {
+            return false;
+        }
+        let mut changed = false;
+        for j in 0..self.flips.len() {
+            if self.flips[j] >= CYCLING_FLIPS && self.alpha_scale[j] > ALPHA_FLOOR {
+                self.alpha_scale[j] = (self.alpha_scale[j] * ALPHA_CUT).max(ALPHA_FLOOR);
+                changed = true;
             }
         }
+        changed
     }
 }
 

@@ -77,7 +77,7 @@ pub struct Wall {
     pub(super) flips: Vec<u32>,
     /// Each node's factor on the tangential augmentation α: 1, lowered for a node that
     /// cycled between stick and slip in a failed attempt (see
-    /// [`Contribution::after_failed_attempt`]), and kept for the rest of the run.
+    /// [`crate::model::contribution::Recovery::after_failed_attempt`]), and kept for the rest of the run.
     pub(super) alpha_scale: Vec<f64>,
     /// A contact entity's body.
     pub body: Option<Body>,
@@ -170,7 +170,6 @@ impl Wall {
     }
 
     /// One tracked node placed at `pose` (`pose_old` at the step's start).
-    #[allow(clippy::too_many_arguments)]
     pub(super) fn node(
         &self,
         j: usize,
@@ -234,105 +233,146 @@ impl Wall {
                 id - nv[i] * nv[k] - wp.gap * wp.hessian[i][k]
             })
         });
-        let mu = self.def.friction;
         // f_local (force on the node in the frame), ∂f_local/∂g, and for ALM ∂f/∂λ.
         let (fl, dfdg) = if alm_wall {
-            let pt = alm_law(g, lam, &self.law(j), decision);
-            e.c.active = pt.active;
-            e.c.sticking = pt.sticking;
-            e.c.branch = pt.branch;
-            e.c.cone_excess = pt.cone_excess;
-            let mut fl = [0.0; 3];
-            let mut dfdg = [[0.0; 3]; 3];
-            for i in 0..3 {
-                fl[i] = kappa * (lam[i] - pt.h[i]);
-                e.r_mult[i] = -kappa * pt.h[i];
-                for k in 0..3 {
-                    dfdg[i][k] = -kappa * pt.dh_dg[i][k];
-                    let id = if i == k { 1.0 } else { 0.0 };
-                    // r_λ = −κ h: ∂/∂λ = −κ ∂h/∂λ, ∂/∂x = −κ ∂h/∂g Pᵀ.
-                    // A stick or active row has no λ term; where the node's own dof
-                    // along that direction is prescribed (a symmetry plane) the row
-                    // would then be empty. A −10⁻⁸ κ diagonal in the Jacobian only
-                    // (the residual stays exact) keeps the matrix regular; the row's
-                    // residual is then zero, so λ there does not move.
-                    e.k_ll[i][k] =
-                        -kappa * (pt.dh_dl[i][k] + if i == k { JACOBIAN_REG } else { 0.0 });
-                    // ∂(κ(λ − h))/∂λ in the frame; mapped to global rows below.
-                    e.k_xl[i][k] = kappa * (id - pt.dh_dl[i][k]);
-                }
-            }
-            (fl, dfdg)
+            self.alm_local(j, g, lam, decision, &mut e)
         } else {
-            // The force carried from the last step turns with the wall (or body) over
-            // the step: R Rₙᵀ f (objective; the entity coupling's Jacobian assumes it).
-            let f0 = self.ft_old[j];
-            let fo: [f64; 3] = std::array::from_fn(|i| {
-                (0..3)
-                    .map(|k| (0..3).map(|l| pose.r[i][l] * pose_old.r[k][l]).sum::<f64>() * f0[k])
-                    .sum()
-            });
-            let t1 = [p[0][1], p[1][1], p[2][1]];
-            let t2 = [p[0][2], p[1][2], p[2][2]];
-            let fo_l = [
-                t1[0] * fo[0] + t1[1] * fo[1] + t1[2] * fo[2],
-                t2[0] * fo[0] + t2[1] * fo[1] + t2[2] * fo[2],
-            ];
-            let kp = self.def.penalty_scale * self.k_node[j];
-            let pt = penalty(g, fo_l, kp, kp, mu);
-            e.c.active = pt.active;
-            e.c.sticking = pt.sticking;
-            for i in 0..3 {
-                e.ft_new[i] = t1[i] * pt.f[1] + t2[i] * pt.f[2];
-            }
-            (pt.f, pt.df_dg)
+            self.penalty_local(j, g, &p, pose, pose_old, &mut e)
         };
-        // Global force on the node f = P f_local; r_node = −f.
-        let mut f = [0.0; 3];
-        for i in 0..3 {
-            for k in 0..3 {
-                f[i] += p[i][k] * fl[k];
-            }
-            e.r_node[i] = -f[i];
-        }
-        e.c.force = f;
-        e.c.normal_force = fl[0];
-        // ∂r_node/∂x = −P (∂f/∂g) Pᵀ − f_N H (the normal turns with x on curved walls;
-        // the tangents' turning is left out).
-        let mut a = [[0.0; 3]; 3];
-        for i in 0..3 {
-            for k in 0..3 {
-                for l in 0..3 {
-                    a[i][k] += p[i][l] * dfdg[l][k];
-                }
-            }
-        }
-        for i in 0..3 {
-            for k in 0..3 {
-                let mut s = 0.0;
-                for l in 0..3 {
-                    s += a[i][l] * p[k][l];
-                }
-                e.k_xx[i][k] = -s - fl[0] * wp.hessian[i][k];
-            }
-        }
-        if alm_wall {
-            // Node rows: ∂r_node/∂λ = −P ∂f/∂λ; multiplier rows: ∂r_λ/∂x = −κ ∂h/∂g Pᵀ
-            // = (∂f/∂g) Pᵀ.
-            let fl_l = e.k_xl;
-            let mut k_lx = [[0.0; 3]; 3];
-            let mut k_xl = [[0.0; 3]; 3];
-            for i in 0..3 {
-                for k in 0..3 {
-                    for l in 0..3 {
-                        k_xl[i][k] -= p[i][l] * fl_l[l][k];
-                        k_lx[i][k] += dfdg[i][l] * p[k][l];
-                    }
-                }
-            }
-            e.k_xl = k_xl;
-            e.k_lx = k_lx;
-        }
+        node_rows(&mut e, &p, fl, &dfdg, &wp.hessian, alm_wall);
         e
+    }
+
+    /// The ALM law at node `j` for the gaps `g`: the local force and ∂f/∂g; fills the
+    /// node's state, its multiplier rows and (in the frame) ∂f/∂λ in `e.k_xl`.
+    fn alm_local(
+        &self,
+        j: usize,
+        g: [f64; 3],
+        lam: [f64; 3],
+        decision: Decision,
+        e: &mut NodeEval,
+    ) -> ([f64; 3], [[f64; 3]; 3]) {
+        let kappa = self.kappa[j];
+        let pt = alm_law(g, lam, &self.law(j), decision);
+        e.c.active = pt.active;
+        e.c.sticking = pt.sticking;
+        e.c.branch = pt.branch;
+        e.c.cone_excess = pt.cone_excess;
+        let mut fl = [0.0; 3];
+        let mut dfdg = [[0.0; 3]; 3];
+        for i in 0..3 {
+            fl[i] = kappa * (lam[i] - pt.h[i]);
+            e.r_mult[i] = -kappa * pt.h[i];
+            for k in 0..3 {
+                dfdg[i][k] = -kappa * pt.dh_dg[i][k];
+                let id = if i == k { 1.0 } else { 0.0 };
+                // r_λ = −κ h: ∂/∂λ = −κ ∂h/∂λ, ∂/∂x = −κ ∂h/∂g Pᵀ.
+                // A stick or active row has no λ term; where the node's own dof
+                // along that direction is prescribed (a symmetry plane) the row
+                // would then be empty. A −10⁻⁸ κ diagonal in the Jacobian only
+                // (the residual stays exact) keeps the matrix regular; the row's
+                // residual is then zero, so λ there does not move.
+                e.k_ll[i][k] = -kappa * (pt.dh_dl[i][k] + if i == k { JACOBIAN_REG } else { 0.0 });
+                // ∂(κ(λ − h))/∂λ in the frame; mapped to global rows below.
+                e.k_xl[i][k] = kappa * (id - pt.dh_dl[i][k]);
+            }
+        }
+        (fl, dfdg)
+    }
+
+    /// The penalty law at node `j` for the gaps `g` in the frame `p`: the local force and
+    /// ∂f/∂g; fills the node's state and its carried tangential force.
+    fn penalty_local(
+        &self,
+        j: usize,
+        g: [f64; 3],
+        p: &[[f64; 3]; 3],
+        pose: &Pose,
+        pose_old: &Pose,
+        e: &mut NodeEval,
+    ) -> ([f64; 3], [[f64; 3]; 3]) {
+        let mu = self.def.friction;
+        // The force carried from the last step turns with the wall (or body) over
+        // the step: R Rₙᵀ f (objective; the entity coupling's Jacobian assumes it).
+        let f0 = self.ft_old[j];
+        let fo: [f64; 3] = std::array::from_fn(|i| {
+            (0..3)
+                .map(|k| (0..3).map(|l| pose.r[i][l] * pose_old.r[k][l]).sum::<f64>() * f0[k])
+                .sum()
+        });
+        let t1 = [p[0][1], p[1][1], p[2][1]];
+        let t2 = [p[0][2], p[1][2], p[2][2]];
+        let fo_l = [
+            t1[0] * fo[0] + t1[1] * fo[1] + t1[2] * fo[2],
+            t2[0] * fo[0] + t2[1] * fo[1] + t2[2] * fo[2],
+        ];
+        let kp = self.def.penalty_scale * self.k_node[j];
+        let pt = penalty(g, fo_l, kp, kp, mu);
+        e.c.active = pt.active;
+        e.c.sticking = pt.sticking;
+        for i in 0..3 {
+            e.ft_new[i] = t1[i] * pt.f[1] + t2[i] * pt.f[2];
+        }
+        (pt.f, pt.df_dg)
+    }
+}
+
+/// A node's global rows from its local force `fl` and ∂f/∂g in the frame `p` (`hessian`
+/// the wall's curvature at the projection): the force, ∂r_node/∂x and, for ALM, the
+/// node–multiplier blocks (from ∂f/∂λ in the frame, left in `e.k_xl` by the law).
+fn node_rows(
+    e: &mut NodeEval,
+    p: &[[f64; 3]; 3],
+    fl: [f64; 3],
+    dfdg: &[[f64; 3]; 3],
+    hessian: &[[f64; 3]; 3],
+    alm_wall: bool,
+) {
+    // Global force on the node f = P f_local; r_node = −f.
+    let mut f = [0.0; 3];
+    for i in 0..3 {
+        for k in 0..3 {
+            f[i] += p[i][k] * fl[k];
+        }
+        e.r_node[i] = -f[i];
+    }
+    e.c.force = f;
+    e.c.normal_force = fl[0];
+    // ∂r_node/∂x = −P (∂f/∂g) Pᵀ − f_N H (the normal turns with x on curved walls;
+    // the tangents' turning is left out).
+    let mut a = [[0.0; 3]; 3];
+    for i in 0..3 {
+        for k in 0..3 {
+            for l in 0..3 {
+                a[i][k] += p[i][l] * dfdg[l][k];
+            }
+        }
+    }
+    for i in 0..3 {
+        for k in 0..3 {
+            let mut s = 0.0;
+            for l in 0..3 {
+                s += a[i][l] * p[k][l];
+            }
+            e.k_xx[i][k] = -s - fl[0] * hessian[i][k];
+        }
+    }
+    if alm_wall {
+        // Node rows: ∂r_node/∂λ = −P ∂f/∂λ; multiplier rows: ∂r_λ/∂x = −κ ∂h/∂g Pᵀ
+        // = (∂f/∂g) Pᵀ.
+        let fl_l = e.k_xl;
+        let mut k_lx = [[0.0; 3]; 3];
+        let mut k_xl = [[0.0; 3]; 3];
+        for i in 0..3 {
+            for k in 0..3 {
+                for l in 0..3 {
+                    k_xl[i][k] -= p[i][l] * fl_l[l][k];
+                    k_lx[i][k] += dfdg[i][l] * p[k][l];
+                }
+            }
+        }
+        e.k_xl = k_xl;
+        e.k_lx = k_lx;
     }
 }
