@@ -11,8 +11,11 @@ import math
 import os
 import platform
 import re
-import subprocess
-from datetime import datetime, timezone
+import sys
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from alfe_run import alfe_info as _alfe_info, cpu_name, mpi_version  # noqa: E402
+from alfe_run import read_history, read_meta  # noqa: E402,F401
 
 try:
     import tomllib
@@ -111,38 +114,6 @@ def generic_spec(scene, wall):
 
 
 # --- reading ------------------------------------------------------------------------------------
-def read_meta(path):
-    meta = {}
-    with open(path) as f:
-        for line in f:
-            line = line.rstrip("\n")
-            if "=" in line:
-                k, v = line.split("=", 1)
-                meta[k] = v
-    return meta
-
-
-def read_history(path):
-    if not os.path.exists(path):
-        return None
-    rows = []
-    with open(path, newline="") as f:
-        for row in csv.DictReader(f):
-            conv = {}
-            for k, v in row.items():
-                if k is None or v is None:
-                    continue  # a line cut short by a killed run
-                try:
-                    conv[k] = float(v)
-                except ValueError:
-                    conv[k] = v
-            rows.append(conv)
-    # a killed run may leave a last line written half
-    if rows and len(rows[-1]) < len(rows[0]):
-        rows.pop()
-    return rows
-
-
 def read_deck(path):
     if tomllib is None or not os.path.exists(path):
         return None
@@ -298,60 +269,18 @@ def derive(run, spec, deck):
 
 # --- output -------------------------------------------------------------------------------------
 def machine_info(meta):
-    cpu = platform.processor() or "?"
-    try:
-        with open("/proc/cpuinfo") as f:
-            for line in f:
-                if line.startswith("model name"):
-                    cpu = line.split(":", 1)[1].strip()
-                    break
-    except OSError:
-        pass
-    try:
-        mpi = subprocess.run(["mpirun", "--version"], capture_output=True, text=True).stdout
-        mpi = mpi.splitlines()[0].strip() if mpi else "?"
-    except OSError:
-        mpi = "?"
     return {
         "nproc": os.cpu_count(),
-        "cpu": cpu,
+        "cpu": cpu_name(),
         "kernel": platform.release(),
-        "mpi": mpi,
+        "mpi": mpi_version(),
         "uptime_start": meta.get("uptime_start", "").strip(),
         "uptime_end": meta.get("uptime_end", "").strip(),
     }
 
 
-def iso(ts):
-    return datetime.fromtimestamp(ts, tz=timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ")
-
-
 def alfe_info(meta):
-    head = meta.get("alfe_head") or None
-    override = meta.get("alfe_commit_override") or None
-    built_from = meta.get("alfe_built_from") or None
-    mtime = int(meta["alfe_binary_mtime"]) if meta.get("alfe_binary_mtime") else None
-    head_time = int(meta["alfe_head_time"]) if meta.get("alfe_head_time") else None
-    dirty = int(meta["alfe_dirty_files"]) if meta.get("alfe_dirty_files") else 0
-    info = {
-        "binary": meta.get("alfe_path"),
-        "binary_sha256_prefix": meta.get("alfe_binary_sha256"),
-        "binary_mtime": iso(mtime) if mtime else None,
-        "repo": meta.get("alfe_repo") or None,
-        "repo_head": head,
-        "repo_dirty_source_files": dirty,
-        "commit": override or head,
-        "commit_note": None,
-    }
-    if override:
-        info["commit_note"] = "given with --commit"
-    elif head and mtime and head_time and mtime < head_time:
-        info["commit"] = built_from or head
-        info["commit_note"] = (f"binary written {iso(mtime)}, before HEAD {head[:10]} ({iso(head_time)}): "
-                               f"taken as the newest commit before the build")
-    elif head and dirty:
-        info["commit_note"] = f"work tree had {dirty} modified source file(s)"
-    return info
+    return _alfe_info(meta, head_time=False, dirty_default=0)
 
 
 def fmt_num(v, digits=3):

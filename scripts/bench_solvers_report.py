@@ -9,9 +9,11 @@ import json
 import os
 import platform
 import statistics
-import subprocess
 import sys
-from datetime import datetime, timezone
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from alfe_run import alfe_info as _alfe_info, cpu_name, memory_gib, mpi_version  # noqa: E402
+from alfe_run import read_history, read_meta  # noqa: E402,F401
 
 # Counts that depend only on the algorithm: identical in every repetition of a configuration.
 COUNT_KEYS = [
@@ -26,104 +28,20 @@ COUNT_KEYS = [
 SPREAD_WARN = 0.10  # (max - min) / median of the wall time above which the report warns
 
 
-def read_meta(path):
-    meta = {}
-    with open(path) as f:
-        for line in f:
-            line = line.rstrip("\n")
-            if "=" in line:
-                k, v = line.split("=", 1)
-                meta[k] = v
-    return meta
-
-
-def read_history(path):
-    if not os.path.exists(path):
-        return None
-    with open(path, newline="") as f:
-        rows = list(csv.DictReader(f))
-    out = []
-    for row in rows:
-        conv = {}
-        for k, v in row.items():
-            try:
-                conv[k] = int(v)
-            except ValueError:
-                try:
-                    conv[k] = float(v)
-                except ValueError:
-                    conv[k] = v
-        out.append(conv)
-    return out
-
-
 def machine_info(meta):
-    cpu = platform.processor() or "?"
-    try:
-        with open("/proc/cpuinfo") as f:
-            for line in f:
-                if line.startswith("model name"):
-                    cpu = line.split(":", 1)[1].strip()
-                    break
-    except OSError:
-        pass
-    mem_gib = None
-    try:
-        with open("/proc/meminfo") as f:
-            for line in f:
-                if line.startswith("MemTotal:"):
-                    mem_gib = round(int(line.split()[1]) / 1024**2, 1)
-    except OSError:
-        pass
-    try:
-        mpi = subprocess.run(["mpirun", "--version"], capture_output=True, text=True).stdout
-        mpi = mpi.splitlines()[0].strip() if mpi else "?"
-    except OSError:
-        mpi = "?"
     return {
         "nproc": os.cpu_count(),
-        "cpu": cpu,
-        "memory_gib": mem_gib,
+        "cpu": cpu_name(),
+        "memory_gib": memory_gib(),
         "kernel": platform.release(),
-        "mpi": mpi,
+        "mpi": mpi_version(),
         "load_average_start": meta.get("load_start", ""),
         "load_average_end": meta.get("load_end", ""),
     }
 
 
 def alfe_info(meta):
-    head = meta.get("alfe_head") or None
-    override = meta.get("alfe_commit_override") or None
-    built_from = meta.get("alfe_built_from") or None
-    mtime = int(meta["alfe_binary_mtime"]) if meta.get("alfe_binary_mtime") else None
-    head_time = int(meta["alfe_head_time"]) if meta.get("alfe_head_time") else None
-    info = {
-        "binary": meta.get("alfe_path"),
-        "binary_sha256_prefix": meta.get("alfe_binary_sha256"),
-        "binary_mtime": iso(mtime) if mtime else None,
-        "repo": meta.get("alfe_repo") or None,
-        "repo_head": head,
-        "repo_head_time": iso(head_time) if head_time else None,
-        "repo_dirty_source_files": int(meta["alfe_dirty_files"]) if meta.get("alfe_dirty_files") else None,
-        "commit": override or head,
-        "commit_note": None,
-    }
-    if override:
-        info["commit_note"] = "given with --commit"
-    elif head and mtime and head_time and mtime < head_time:
-        # The binary predates the work tree's HEAD: it was built from an earlier commit.
-        info["commit"] = built_from or head
-        info["commit_note"] = (
-            f"binary written {iso(mtime)}, before HEAD {head[:10]} ({iso(head_time)}): "
-            f"taken as the newest commit before the build"
-        )
-    elif head and info["repo_dirty_source_files"]:
-        info["commit_note"] = f"work tree had {info['repo_dirty_source_files']} modified source file(s)"
-    return info
-
-
-def iso(ts):
-    return datetime.fromtimestamp(ts, timezone.utc).strftime("%Y-%m-%d %H:%M:%SZ")
+    return _alfe_info(meta, iso_fmt="%Y-%m-%d %H:%M:%SZ")
 
 
 def collect(work):
