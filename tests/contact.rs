@@ -474,7 +474,7 @@ fn taylor_bar_implicit_alm() {
 
 /// cylinder-press (frictional, nearly incompressible, 30 % press) finishes with every
 /// solver on its built-in mesh, with the same force from all three and within 0.3 % of
-/// the force on the mesh refined 4× in x and z (25.358 N/mm, `scripts/cylinder-study`;
+/// the force on the mesh refined 4× in x and z (25.358 N/mm, `scripts/study --plan cylinder`;
 /// the built-in mesh gives 25.326), and zero penetration at solver tolerance.
 #[test]
 fn cylinder_press_finishes_with_every_solver_near_the_refined_force() {

@@ -60,7 +60,7 @@ pub struct WallDeck {
     pub kappa: Option<f64>,
     /// Penalty stiffness / nodal stiffness (default 1: the stiffest that converges on
     /// every wall scene; 0.1, LS-DYNA's SLSFAC default, gave 60 % less Hertz force,
-    /// `scripts/penalty-study`).
+    /// `scripts/study --plan penalty`).
     #[serde(default = "d_penalty_scale")]
     pub penalty_scale: f64,
     /// ALM's tangential augmentation α (stick stiffness α κ); default
