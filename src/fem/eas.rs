@@ -15,14 +15,15 @@
 //! * Any material: one bilinear form serves u and α variations alike. For variations
 //!   δF₁, δF₂ fixed in the reference (Grad δu and H_k both are), with l = δF F⁻¹,
 //!   D(τ : l₁)[δF₂] = sym l₁ : c : sym l₂ + τ : (l₁ᵀ l₂), the spatial form of
-//!   [`super::element`]. Small kinematics uses l = δF, the Cauchy stress, no τ term.
+//!   [`super::solid`]. Small kinematics uses l = δF, the Cauchy stress, no τ term.
 //!
 //! Known limit (Wriggers & Reese 1996): under large compression an EAS element can show
 //! hourglass instabilities; `reduced` is the element for that.
 
+use super::error::{material_at, At, ElementError};
+use super::kernel::{nodes, ElementData, ElementKernel, ElementOutput};
 use super::kinematics::{
-    add_force, add_tangent, cofactor, deformation_gradient, reference_point, ElementError,
-    LocalTangent,
+    add_force, add_tangent, cofactor, deformation_gradient, reference_point, LocalTangent,
 };
 use super::shape::HEX8;
 use crate::material::{Kinematics, Material, StressPoint};
@@ -55,9 +56,10 @@ fn reference(x0: &[[f64; 3]; 8]) -> Result<Reference, ElementError> {
     }
     let det_j0 = j0.determinant();
     if det_j0.is_nan() || det_j0 <= 0.0 {
-        return Err(ElementError(format!(
-            "reference det J = {det_j0:.3e} ≤ 0 at the element centre"
-        )));
+        return Err(ElementError::ReferenceInverted {
+            at: At::Centre,
+            det: det_j0,
+        });
     }
     // Rows of J₀⁻¹: ∂ξ_m/∂X.
     let j0_inv = cofactor(&j0).transpose() / det_j0;
@@ -132,35 +134,185 @@ fn point_f(u: &[[f64; 3]; 8], grad0: &[[f64; 3]; 8], modes: &[M3; N_ALPHA], alph
 /// Largest local Newton iterations on α.
 const MAX_LOCAL: usize = 30;
 
-/// Internal force and (if `k`) the condensed tangent of one EAS hex8; `state_old` and
-/// `state_new` hold the 8 points' material history and then α ([`state_len`]).
-#[allow(clippy::too_many_arguments)]
-pub fn force(
-    x0: &[[f64; 3]; 8],
-    u: &[[f64; 3]; 8],
-    mat: &dyn Material,
-    state_old: &[f64],
-    state_new: &mut [f64],
-    f: &mut [f64],
-    k: Option<&mut [f64]>,
-) -> Result<(), ElementError> {
-    let ns = mat.n_state();
-    assert_eq!(state_old.len(), 8 * ns + N_ALPHA, "EAS history length");
-    assert_eq!(state_new.len(), 8 * ns + N_ALPHA, "EAS history length");
-    let finite = mat.kinematics() == Kinematics::Finite;
-    let r = reference(x0)?;
-    let mut alpha: [f64; N_ALPHA] = std::array::from_fn(|i| state_old[8 * ns + i]);
-    let merr = |g: usize, e: crate::material::MaterialError| {
-        ElementError(format!("material at Gauss point {g}: {}", e.0))
-    };
-    // Local Newton on R_α(u, α) = 0; each pass ends with the points evaluated at α.
-    let mut sps: [Option<StressPoint>; 8] = Default::default();
-    let mut finv = [M3::identity(); 8];
-    let mut kaa = Kaa::zeros();
-    let mut it = 0;
-    let mut last_da = f64::INFINITY;
-    // The element's displacement range, the size of α's corrections that matter.
-    let du = (0..3)
+/// The EAS hex8 (Q1/E9); its history is the 8 points' material history, then α.
+#[derive(Debug, Clone, Copy)]
+pub struct Eas;
+
+impl ElementKernel for Eas {
+    fn n_nodes(&self) -> usize {
+        8
+    }
+    fn n_points(&self) -> usize {
+        8
+    }
+    fn state_len(&self, n_state: usize) -> usize {
+        state_len(n_state)
+    }
+    fn force(&self, e: &ElementData, out: ElementOutput) -> Result<(), ElementError> {
+        force(e, out)
+    }
+    fn stress(&self, e: &ElementData) -> Result<[f64; 6], ElementError> {
+        stress(nodes(e.x0), nodes(e.u), e.mat, e.state_old)
+    }
+}
+
+/// One pass over the points at the current α: the enhanced residual R_α and block K_αα,
+/// the scale the convergence test uses, and each point's stress and F⁻¹.
+struct Pass {
+    ra: SVector<f64, N_ALPHA>,
+    kaa: Kaa,
+    /// max over points of |τ| w |H|: the element's stress work per unit α.
+    scale: f64,
+    /// max over points of |F − I|: the strains' round-off floor.
+    grad_max: f64,
+    sps: [Option<StressPoint>; 8],
+    finv: [M3; 8],
+}
+
+/// The element without its enhanced parameters' Newton loop: reference data, material,
+/// displacements, history.
+struct Local<'a> {
+    r: &'a Reference,
+    u: &'a [[f64; 3]; 8],
+    e: &'a ElementData<'a>,
+    finite: bool,
+}
+
+impl Local<'_> {
+    /// Evaluates every point at `alpha` into `p` (trial history into `state_new`);
+    /// `Some((g, det F))` if point g is inverted.
+    fn pass(
+        &self,
+        alpha: &[f64; N_ALPHA],
+        state_new: &mut [f64],
+        p: &mut Pass,
+    ) -> Result<Option<(usize, f64)>, ElementError> {
+        let (r, mat, finite) = (self.r, self.e.mat, self.finite);
+        let ns = mat.n_state();
+        p.ra = SVector::<f64, N_ALPHA>::zeros();
+        p.kaa.fill(0.0);
+        p.scale = 0.0;
+        p.grad_max = 0.0;
+        for g in 0..8 {
+            let fm = point_f(self.u, &r.grad0[g], &r.modes[g], alpha);
+            p.grad_max = p.grad_max.max((fm - M3::identity()).amax());
+            if finite {
+                let j = fm.determinant();
+                if j.is_nan() || j <= 0.0 {
+                    return Ok(Some((g, j)));
+                }
+                p.finv[g] = cofactor(&fm).transpose() / j;
+            }
+            let sp = mat
+                .evaluate(
+                    &fm,
+                    &self.e.state_old[g * ns..(g + 1) * ns],
+                    &mut state_new[g * ns..(g + 1) * ns],
+                )
+                .map_err(material_at(At::Gauss(g)))?;
+            let ls: [M3; N_ALPHA] = std::array::from_fn(|q| r.modes[g][q] * p.finv[g]);
+            for a in 0..N_ALPHA {
+                p.ra[a] += r.w[g] * work(&sp.stress, &ls[a]);
+                for q in 0..N_ALPHA {
+                    p.kaa[(a, q)] += r.w[g] * bilinear(&sp, &ls[a], &ls[q], finite);
+                }
+            }
+            let hmax = r.modes[g].iter().map(|h| h.amax()).fold(0.0f64, f64::max);
+            let smax = sp.stress.iter().fold(0.0f64, |m, s| m.max(s.abs()));
+            p.scale = p.scale.max(smax * r.w[g] * hmax);
+            p.sps[g] = Some(sp);
+        }
+        Ok(None)
+    }
+
+    /// The local Newton iteration on R_α(u, α) = 0 from `alpha`; returns the converged
+    /// α and its pass with `kaa` holding K_αα⁻¹.
+    fn solve(
+        &self,
+        mut alpha: [f64; N_ALPHA],
+        state_new: &mut [f64],
+    ) -> Result<([f64; N_ALPHA], Pass), ElementError> {
+        let mut it = 0;
+        let mut last_da = f64::INFINITY;
+        let du = displacement_range(self.u);
+        // A local step that inverts a point is halved (up to 8 times); α from the last
+        // converged state that inverts one is dropped for α = 0 (the compatible element).
+        let mut prev: Option<([f64; N_ALPHA], SVector<f64, N_ALPHA>, f64)> = None;
+        let mut halvings = 0;
+        let mut restarted = false;
+        let mut p = Pass {
+            ra: SVector::<f64, N_ALPHA>::zeros(),
+            kaa: Kaa::zeros(),
+            scale: 0.0,
+            grad_max: 0.0,
+            sps: Default::default(),
+            finv: [M3::identity(); 8],
+        };
+        loop {
+            if let Some((g, j)) = self.pass(&alpha, state_new, &mut p)? {
+                if let (Some((a0, da, _)), true) = (&prev, halvings < 8) {
+                    halvings += 1;
+                    let s = 0.5f64.powi(halvings);
+                    alpha = std::array::from_fn(|i| a0[i] - s * da[i]);
+                    continue;
+                }
+                if prev.is_none() && !restarted && alpha.iter().any(|&a| a != 0.0) {
+                    restarted = true;
+                    alpha = [0.0; N_ALPHA];
+                    continue;
+                }
+                return Err(ElementError::Inverted {
+                    at: At::Gauss(g),
+                    det: j,
+                });
+            }
+            let Some(inv) = p.kaa.try_inverse() else {
+                return Err(ElementError::SingularEnhanced);
+            };
+            // Converged when the enhanced residual is 1e-10 of the element's stress work
+            // (or there is no stress), or when the last Newton correction was 1e-8 of α
+            // and of the element's displacements, or at the round-off floor: strains come
+            // from F − I, which carries ε_machine / |F − I| relative noise (1e-7 at the
+            // pinched cylinder's strains of 1e-9), and no iteration can pass a test finer
+            // than that.
+            let res = p.ra.amax();
+            let a_norm = alpha.iter().fold(0.0f64, |m, a| m.max(a.abs()));
+            let floor = 1e-8 + 1e3 * f64::EPSILON / p.grad_max.max(f64::MIN_POSITIVE);
+            if res <= 1e-10 * p.scale || p.scale == 0.0 || last_da <= floor * (a_norm + du) {
+                p.kaa = inv;
+                return Ok((alpha, p));
+            }
+            // A local step that raises the enhanced residual (a point switching between
+            // elastic and plastic across it) is halved too.
+            if let (Some((a0, da, r0)), true) = (&prev, halvings < 8) {
+                if res > *r0 {
+                    halvings += 1;
+                    let s = 0.5f64.powi(halvings);
+                    alpha = std::array::from_fn(|i| a0[i] - s * da[i]);
+                    continue;
+                }
+            }
+            it += 1;
+            if it > MAX_LOCAL {
+                return Err(ElementError::EnhancedNotConverged {
+                    iterations: MAX_LOCAL,
+                    residual: p.ra.amax(),
+                });
+            }
+            let da = inv * p.ra;
+            prev = Some((alpha, da, res));
+            halvings = 0;
+            for (a, d) in alpha.iter_mut().zip(da.iter()) {
+                *a -= d;
+            }
+            last_da = da.amax();
+        }
+    }
+}
+
+/// The element's displacement range, the size of α's corrections that matter.
+fn displacement_range(u: &[[f64; 3]; 8]) -> f64 {
+    (0..3)
         .map(|c| {
             let (lo, hi) = u
                 .iter()
@@ -169,111 +321,41 @@ pub fn force(
                 });
             hi - lo
         })
-        .fold(0.0f64, f64::max);
-    // A local step that inverts a point is halved (up to 8 times); α from the last
-    // converged state that inverts one is dropped for α = 0 (the compatible element).
-    let mut prev: Option<([f64; N_ALPHA], SVector<f64, N_ALPHA>, f64)> = None;
-    let mut halvings = 0;
-    let mut restarted = false;
-    'local: loop {
-        let mut ra = SVector::<f64, N_ALPHA>::zeros();
-        kaa.fill(0.0);
-        let mut scale = 0.0f64;
-        let mut grad_max = 0.0f64;
-        for g in 0..8 {
-            let fm = point_f(u, &r.grad0[g], &r.modes[g], &alpha);
-            grad_max = grad_max.max((fm - M3::identity()).amax());
-            if finite {
-                let j = fm.determinant();
-                if j.is_nan() || j <= 0.0 {
-                    if let (Some((a0, da, _)), true) = (&prev, halvings < 8) {
-                        halvings += 1;
-                        let s = 0.5f64.powi(halvings);
-                        alpha = std::array::from_fn(|i| a0[i] - s * da[i]);
-                        continue 'local;
-                    }
-                    if prev.is_none() && !restarted && alpha.iter().any(|&a| a != 0.0) {
-                        restarted = true;
-                        alpha = [0.0; N_ALPHA];
-                        continue 'local;
-                    }
-                    return Err(ElementError(format!(
-                        "det F = {j:.3e} ≤ 0 at Gauss point {g} (element inverted)"
-                    )));
-                }
-                finv[g] = cofactor(&fm).transpose() / j;
-            }
-            let sp = mat
-                .evaluate(
-                    &fm,
-                    &state_old[g * ns..(g + 1) * ns],
-                    &mut state_new[g * ns..(g + 1) * ns],
-                )
-                .map_err(|e| merr(g, e))?;
-            let ls: [M3; N_ALPHA] = std::array::from_fn(|q| r.modes[g][q] * finv[g]);
-            for p in 0..N_ALPHA {
-                ra[p] += r.w[g] * work(&sp.stress, &ls[p]);
-                for q in 0..N_ALPHA {
-                    kaa[(p, q)] += r.w[g] * bilinear(&sp, &ls[p], &ls[q], finite);
-                }
-            }
-            let hmax = r.modes[g].iter().map(|h| h.amax()).fold(0.0f64, f64::max);
-            let smax = sp.stress.iter().fold(0.0f64, |m, s| m.max(s.abs()));
-            scale = scale.max(smax * r.w[g] * hmax);
-            sps[g] = Some(sp);
-        }
-        let Some(inv) = kaa.try_inverse() else {
-            return Err(ElementError(
-                "the enhanced-strain block K_αα is singular".into(),
-            ));
-        };
-        // Converged when the enhanced residual is 1e-10 of the element's stress work (or
-        // there is no stress), or when the last Newton correction was 1e-8 of α and of
-        // the element's displacements, or at the round-off floor: strains come from
-        // F − I, which carries ε_machine / |F − I| relative noise (1e-7 at the pinched
-        // cylinder's strains of 1e-9), and no iteration can pass a test finer than that.
-        let res = ra.amax();
-        let a_norm = alpha.iter().fold(0.0f64, |m, a| m.max(a.abs()));
-        let floor = 1e-8 + 1e3 * f64::EPSILON / grad_max.max(f64::MIN_POSITIVE);
-        if res <= 1e-10 * scale || scale == 0.0 || last_da <= floor * (a_norm + du) {
-            kaa = inv;
-            break;
-        }
-        // A local step that raises the enhanced residual (a point switching between
-        // elastic and plastic across it) is halved too.
-        if let (Some((a0, da, r0)), true) = (&prev, halvings < 8) {
-            if res > *r0 {
-                halvings += 1;
-                let s = 0.5f64.powi(halvings);
-                alpha = std::array::from_fn(|i| a0[i] - s * da[i]);
-                continue 'local;
-            }
-        }
-        it += 1;
-        if it > MAX_LOCAL {
-            return Err(ElementError(format!(
-                "the enhanced strains did not converge in {MAX_LOCAL} local iterations (|R_α| = {:.3e})",
-                ra.amax()
-            )));
-        }
-        let da = inv * ra;
-        prev = Some((alpha, da, res));
-        halvings = 0;
-        for (a, d) in alpha.iter_mut().zip(da.iter()) {
-            *a -= d;
-        }
-        last_da = da.amax();
-    }
+        .fold(0.0f64, f64::max)
+}
+
+/// Internal force and (if `out.k`) the condensed tangent of one EAS hex8; the history
+/// holds the 8 points' material history and then α ([`state_len`]).
+fn force(e: &ElementData, out: ElementOutput) -> Result<(), ElementError> {
+    let ElementOutput { state_new, f, k } = out;
+    let ns = e.mat.n_state();
+    assert_eq!(e.state_old.len(), 8 * ns + N_ALPHA, "EAS history length");
+    assert_eq!(state_new.len(), 8 * ns + N_ALPHA, "EAS history length");
+    let finite = e.mat.kinematics() == Kinematics::Finite;
+    let r = reference(nodes(e.x0))?;
+    let alpha0: [f64; N_ALPHA] = std::array::from_fn(|i| e.state_old[8 * ns + i]);
+    let local = Local {
+        r: &r,
+        u: nodes(e.u),
+        e,
+        finite,
+    };
+    let (alpha, p) = local.solve(alpha0, state_new)?;
     state_new[8 * ns..].copy_from_slice(&alpha);
-    // Force and tangent at the converged α; kaa now holds K_αα⁻¹.
+    assemble(&r, &p, finite, f, k);
+    Ok(())
+}
+
+/// Force and tangent at the converged α; `p.kaa` holds K_αα⁻¹.
+fn assemble(r: &Reference, p: &Pass, finite: bool, f: &mut [f64], k: Option<&mut [f64]>) {
     f.fill(0.0);
     let mut kuu: LocalTangent<8> = [[[[0.0; 3]; 8]; 3]; 8];
     let mut kua = [[0.0; N_ALPHA]; 24];
     let mut kau = [[0.0; 24]; N_ALPHA];
     for g in 0..8 {
-        let sp = sps[g].as_ref().expect("evaluated");
+        let sp = p.sps[g].as_ref().expect("evaluated");
         let grad: [[f64; 3]; 8] = if finite {
-            super::kinematics::transform_gradients(&finv[g].transpose(), &r.grad0[g])
+            super::kinematics::transform_gradients(&p.finv[g].transpose(), &r.grad0[g])
         } else {
             r.grad0[g]
         };
@@ -282,7 +364,7 @@ pub fn force(
             continue;
         }
         add_tangent(&grad, sp, finite, r.w[g], &mut kuu);
-        let ls: [M3; N_ALPHA] = std::array::from_fn(|q| r.modes[g][q] * finv[g]);
+        let ls: [M3; N_ALPHA] = std::array::from_fn(|q| r.modes[g][q] * p.finv[g]);
         for a in 0..8 {
             for i in 0..3 {
                 let mut lu = M3::zeros();
@@ -301,8 +383,8 @@ pub fn force(
         // K_uα K_αα⁻¹, then the product with K_αu.
         let mut kuaa = [[0.0; N_ALPHA]; 24];
         for (row, src) in kuaa.iter_mut().zip(&kua) {
-            for q in 0..N_ALPHA {
-                row[q] = (0..N_ALPHA).map(|p| src[p] * kaa[(p, q)]).sum();
+            for (q, r) in row.iter_mut().enumerate() {
+                *r = (0..N_ALPHA).map(|a| src[a] * p.kaa[(a, q)]).sum();
             }
         }
         for i in 0..24 {
@@ -312,7 +394,6 @@ pub fn force(
             }
         }
     }
-    Ok(())
 }
 
 /// History length of an EAS hex8: the points' material history, then α.
@@ -320,9 +401,9 @@ pub fn state_len(n_state: usize) -> usize {
     8 * n_state + N_ALPHA
 }
 
-/// Volume-averaged stress at the committed state (α from `state_old`), as
-/// [`super::element::element_stress`] gives it for the other formulations.
-pub fn stress(
+/// Volume-averaged stress at the committed state (α from `state_old`), as the other
+/// kernels give it.
+fn stress(
     x0: &[[f64; 3]; 8],
     u: &[[f64; 3]; 8],
     mat: &dyn Material,
@@ -338,7 +419,7 @@ pub fn stress(
         let fm = point_f(u, &r.grad0[g], &r.modes[g], alpha);
         let s = mat
             .evaluate_stress(&fm, &state_old[g * ns..(g + 1) * ns], &mut scratch)
-            .map_err(|e| ElementError(format!("material at Gauss point {g}: {}", e.0)))?;
+            .map_err(material_at(At::Gauss(g)))?;
         for (a, b) in sum.iter_mut().zip(&s) {
             *a += r.w[g] * b;
         }
@@ -350,7 +431,7 @@ pub fn stress(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::fem::element::{element_force, state_len as elem_state_len, Formulation};
+    use crate::fem::element::{element_force, kernel, Formulation};
     use crate::fem::shape::HEX8_NODES;
     use crate::material::{Hardening, J2Plasticity, LinearElastic, NeoHookean};
     use crate::mesh::ElemKind;
@@ -387,20 +468,15 @@ mod tests {
         mat: &dyn Material,
         k: bool,
     ) -> (Vec<f64>, Vec<f64>, Vec<f64>) {
-        let n = elem_state_len(ElemKind::Hex8, form, mat.n_state());
+        let n = kernel(ElemKind::Hex8, form).state_len(mat.n_state());
         let (old, mut new) = (vec![0.0; n], vec![0.0; n]);
         let mut f = vec![0.0; 24];
         let mut kk = vec![0.0; 576];
         element_force(
             ElemKind::Hex8,
             form,
-            x0,
-            u,
-            mat,
-            &old,
-            &mut new,
-            &mut f,
-            if k { Some(&mut kk) } else { None },
+            &ElementData::new(x0, u, mat, &old),
+            ElementOutput::new(&mut new, &mut f, if k { Some(&mut kk) } else { None }),
         )
         .unwrap();
         (f, kk, new)

@@ -39,10 +39,13 @@
 //! definite for the condensation (`linalg/condense.rs`), which eliminates it
 //! exactly: the factored matrix has only the displacements.
 
+use super::error::{material_at, At, ElementError};
+use super::kernel::{nodes, ElementData, ElementKernel, ElementOutput};
 use super::kinematics::{
-    add_fbar_tangent, add_force, add_tangent, element_kinematics, ElementError, LocalTangent,
+    add_fbar_tangent, add_force, add_tangent, element_kinematics, LocalTangent,
 };
 use super::shape::HEX8;
+use super::solid::FBar;
 use crate::material::{Kinematics, Material, StressPoint};
 
 /// Rows of a hybrid element: 8 nodes and the pressure block.
@@ -66,9 +69,47 @@ struct Volumes {
 }
 
 fn no_split(mat: &dyn Material) -> ElementError {
-    ElementError(format!(
-        "the hybrid element needs a material with a volumetric part U(J) ({mat:?} has none)"
-    ))
+    ElementError::NoVolumetricSplit {
+        material: format!("{mat:?}"),
+    }
+}
+
+/// The hybrid hex8 with the hourglass spring of [`super::reduced`] scaled by `hourglass`
+/// (as on F-bar); its pressure block is its one own block, and without it (condensed,
+/// p = U'(J̄)) it is F-bar.
+#[derive(Debug, Clone, Copy)]
+pub struct Hybrid {
+    fbar: FBar,
+}
+
+impl Hybrid {
+    pub fn new(hourglass: f64) -> Self {
+        Self {
+            fbar: FBar { hourglass },
+        }
+    }
+}
+
+impl ElementKernel for Hybrid {
+    fn n_nodes(&self) -> usize {
+        8
+    }
+    fn n_points(&self) -> usize {
+        8
+    }
+    fn own_blocks(&self) -> usize {
+        1
+    }
+    fn force(&self, e: &ElementData, out: ElementOutput) -> Result<(), ElementError> {
+        let pi: &[f64; 3] = e.own.try_into().expect("one pressure block");
+        force(e, pi, self.fbar.hourglass, out)
+    }
+    fn stress(&self, e: &ElementData) -> Result<[f64; 6], ElementError> {
+        stress(e, e.own[0])
+    }
+    fn condensed(&self) -> Option<&dyn ElementKernel> {
+        Some(&self.fbar)
+    }
 }
 
 /// The pressure unknown's scale s = G / V^{1/3} (p = s π).
@@ -78,17 +119,15 @@ pub fn pressure_scale(mat: &dyn Material, reference_volume: f64) -> f64 {
 
 /// The displacement rows `f` (24) and, with `k`, their tangent for the pressure
 /// p = s `pi` held fixed (s from the reference volume the kinematics integrate).
-#[allow(clippy::too_many_arguments)]
 fn core(
-    x0: &[[f64; 3]; 8],
-    u: &[[f64; 3]; 8],
+    e: &ElementData,
     pi: f64,
-    mat: &dyn Material,
-    state_old: &[f64],
     state_new: &mut [f64],
     f: &mut [f64],
     mut k: Option<&mut LocalTangent<8>>,
 ) -> Result<Volumes, ElementError> {
+    let (mat, state_old) = (e.mat, e.state_old);
+    let (x0, u) = (nodes::<8>(e.x0), nodes::<8>(e.u));
     let ns = mat.n_state();
     assert!(
         state_old.len() == 8 * ns && state_new.len() == 8 * ns,
@@ -119,9 +158,6 @@ fn core(
     let dp = p - u1;
     let a = jbar * (dp - jbar * u2);
     f.fill(0.0);
-    let merr = |g: usize, e: crate::material::MaterialError| {
-        ElementError(format!("material at Gauss point {g}: {}", e.0))
-    };
     for (g, q) in pts.iter().enumerate() {
         let (old, new) = (
             &state_old[g * ns..(g + 1) * ns],
@@ -129,7 +165,9 @@ fn core(
         );
         match k.as_deref_mut() {
             Some(k) => {
-                let mut sp: StressPoint = mat.evaluate(&q.f, old, new).map_err(|e| merr(g, e))?;
+                let mut sp: StressPoint = mat
+                    .evaluate(&q.f, old, new)
+                    .map_err(material_at(At::Gauss(g)))?;
                 for r in 0..3 {
                     sp.stress[r] += jbar * dp;
                     for c in 0..3 {
@@ -145,7 +183,7 @@ fn core(
             None => {
                 let mut s = mat
                     .evaluate_stress(&q.f, old, new)
-                    .map_err(|e| merr(g, e))?;
+                    .map_err(material_at(At::Gauss(g)))?;
                 for si in s.iter_mut().take(3) {
                     *si += jbar * dp;
                 }
@@ -170,33 +208,20 @@ fn core(
 /// of three unknowns: π and two inert ones): `f` (27: the 8 nodes' rows, then the block's)
 /// and, with `k`, the 27×27 Jacobian (row-major). `hourglass` > 0 adds the hourglass
 /// spring of [`super::reduced`] (as on F-bar).
-#[allow(clippy::too_many_arguments)]
-pub fn force(
-    x0: &[[f64; 3]; 8],
-    u: &[[f64; 3]; 8],
+fn force(
+    e: &ElementData,
     pi: &[f64; 3],
-    mat: &dyn Material,
     hourglass: f64,
-    state_old: &[f64],
-    state_new: &mut [f64],
-    f: &mut [f64],
-    k: Option<&mut [f64]>,
+    out: ElementOutput,
 ) -> Result<(), ElementError> {
+    let ElementOutput { state_new, f, k } = out;
+    let (x0, u, mat) = (nodes::<8>(e.x0), nodes::<8>(e.u), e.mat);
     assert_eq!(f.len(), DOFS, "force slice length");
     match k {
         Some(k) => {
             assert_eq!(k.len(), DOFS * DOFS, "tangent slice length");
             let mut kloc = [[[[0.0; 3]; 8]; 3]; 8];
-            let vols = core(
-                x0,
-                u,
-                pi[0],
-                mat,
-                state_old,
-                state_new,
-                &mut f[..24],
-                Some(&mut kloc),
-            )?;
+            let vols = core(e, pi[0], state_new, &mut f[..24], Some(&mut kloc))?;
             k.fill(0.0);
             let kuu = kloc.as_flattened().as_flattened().as_flattened();
             for r in 0..24 {
@@ -235,7 +260,7 @@ pub fn force(
             pressure_rows(&vols, pi, f);
         }
         None => {
-            let vols = core(x0, u, pi[0], mat, state_old, state_new, &mut f[..24], None)?;
+            let vols = core(e, pi[0], state_new, &mut f[..24], None)?;
             if hourglass > 0.0 {
                 super::reduced::add_hourglass(
                     x0,
@@ -263,19 +288,14 @@ fn pressure_rows(vols: &Volumes, pi: &[f64; 3], f: &mut [f64]) {
 
 /// Volume-averaged Cauchy stress of the element with its pressure unknown `pi`: F-bar's,
 /// with J̄ p in place of J̄ U'(J̄) (equal at a solution).
-pub fn stress(
-    x0: &[[f64; 3]; 8],
-    u: &[[f64; 3]; 8],
-    pi: f64,
-    mat: &dyn Material,
-    state_old: &[f64],
-) -> Result<[f64; 6], ElementError> {
-    let ns = mat.n_state();
+fn stress(e: &ElementData, pi: f64) -> Result<[f64; 6], ElementError> {
+    let (x0, u) = (nodes::<8>(e.x0), nodes::<8>(e.u));
+    let ns = e.mat.n_state();
     let mut scratch = vec![0.0; 8 * ns];
     // Σ_a x_a ⊗ f_a = ∫ τ dV for any element force f_a = ∫ τ ∇ₓN_a dV (Σ_a x_a ⊗ ∇ₓN_a
     // = I): the mean stress from the force without a second stress loop.
     let mut f = [0.0; 24];
-    let vols = core(x0, u, pi, mat, state_old, &mut scratch, &mut f, None)?;
+    let vols = core(e, pi, &mut scratch, &mut f, None)?;
     let mut tau = [0.0; 6];
     for a in 0..8 {
         let x = [x0[a][0] + u[a][0], x0[a][1] + u[a][1], x0[a][2] + u[a][2]];
@@ -360,18 +380,12 @@ mod tests {
         let (old, mut new) = (vec![0.0; ns], vec![0.0; ns]);
         let mut f = vec![0.0; DOFS];
         let mut k = vec![0.0; DOFS * DOFS];
-        force(
-            x0,
-            u,
-            pi,
-            mat,
-            hg,
-            &old,
-            &mut new,
-            &mut f,
-            with_k.then_some(&mut k[..]),
-        )
-        .unwrap();
+        Hybrid::new(hg)
+            .force(
+                &ElementData::new(x0, u, mat, &old).with_own(pi),
+                ElementOutput::new(&mut new, &mut f, with_k.then_some(&mut k[..])),
+            )
+            .unwrap();
         (f, k)
     }
 
@@ -427,17 +441,12 @@ mod tests {
                 element_force(
                     ElemKind::Hex8,
                     Formulation::FBar { hourglass: hg },
-                    &x0,
-                    &u,
-                    mat.as_ref(),
-                    &old,
-                    &mut new,
-                    &mut fb,
-                    None,
+                    &ElementData::new(&x0, &u, mat.as_ref(), &old),
+                    ElementOutput::new(&mut new, &mut fb, None),
                 )
                 .unwrap();
-                let v0 = crate::fem::element::element_volume(ElemKind::Hex8, &x0);
-                let jbar = crate::fem::element::element_volume(
+                let v0 = crate::fem::measure::element_volume(ElemKind::Hex8, &x0);
+                let jbar = crate::fem::measure::element_volume(
                     ElemKind::Hex8,
                     &std::array::from_fn::<_, 8, _>(|a| {
                         [x0[a][0] + u[a][0], x0[a][1] + u[a][1], x0[a][2] + u[a][2]]
@@ -454,13 +463,12 @@ mod tests {
                 let sb = element_stress(
                     ElemKind::Hex8,
                     Formulation::FBAR,
-                    &x0,
-                    &u,
-                    mat.as_ref(),
-                    &old,
+                    &ElementData::new(&x0, &u, mat.as_ref(), &old),
                 )
                 .unwrap();
-                let sh = stress(&x0, &u, pi[0], mat.as_ref(), &old).unwrap();
+                let sh = Hybrid::new(0.0)
+                    .stress(&ElementData::new(&x0, &u, mat.as_ref(), &old).with_own(&pi))
+                    .unwrap();
                 let smax = sb.iter().fold(0.0f64, |m, v| m.max(v.abs()));
                 for i in 0..6 {
                     assert!((sb[i] - sh[i]).abs() < 1e-10 * smax, "{sb:?} vs {sh:?}");
@@ -478,7 +486,7 @@ mod tests {
             let u = deform(&x0, &comp(), 0.0);
             let j = comp().determinant();
             let p = mat.volumetric(j).unwrap().0;
-            let v0 = crate::fem::element::element_volume(ElemKind::Hex8, &x0);
+            let v0 = crate::fem::measure::element_volume(ElemKind::Hex8, &x0);
             let pi = [p / pressure_scale(mat.as_ref(), v0), 0.0, 0.0];
             let (fh, _) = mixed(&x0, &u, &pi, mat.as_ref(), 0.0, false);
             let ns = 8 * mat.n_state();
@@ -487,13 +495,8 @@ mod tests {
             element_force(
                 ElemKind::Hex8,
                 Formulation::Standard,
-                &x0,
-                &u,
-                mat.as_ref(),
-                &old,
-                &mut new,
-                &mut fs,
-                None,
+                &ElementData::new(&x0, &u, mat.as_ref(), &old),
+                ElementOutput::new(&mut new, &mut fs, None),
             )
             .unwrap();
             let scale = fs.iter().fold(0.0f64, |m, v| m.max(v.abs()));
@@ -504,13 +507,12 @@ mod tests {
             let ss = element_stress(
                 ElemKind::Hex8,
                 Formulation::Standard,
-                &x0,
-                &u,
-                mat.as_ref(),
-                &old,
+                &ElementData::new(&x0, &u, mat.as_ref(), &old),
             )
             .unwrap();
-            let sh = stress(&x0, &u, pi[0], mat.as_ref(), &old).unwrap();
+            let sh = Hybrid::new(0.0)
+                .stress(&ElementData::new(&x0, &u, mat.as_ref(), &old).with_own(&pi))
+                .unwrap();
             let smax = ss.iter().fold(0.0f64, |m, v| m.max(v.abs()));
             for i in 0..6 {
                 assert!((ss[i] - sh[i]).abs() < 1e-10 * smax, "{ss:?} vs {sh:?}");

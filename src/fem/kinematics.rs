@@ -1,25 +1,13 @@
-//! The per-point pieces of the solid element kernels ([`super::element`], [`super::eas`],
+//! The per-point pieces of the solid element kernels ([`super::solid`], [`super::eas`],
 //! [`super::reduced`], [`super::hybrid`]): reference gradients, the deformation
 //! gradient, the force and tangent accumulators, the kinematics of every point with F̄
 //! under F-bar (de Souza Neto et al. 1996) and its extra tangent term. Total Lagrangian
 //! in the spatial form of Bonet & Wood, *Nonlinear Continuum Mechanics for FEA*, §8–9.
 
+use super::error::{At, ElementError};
 use super::shape::Tabulated;
 use crate::material::{Kinematics, StressPoint};
 use nalgebra::Matrix3;
-use std::fmt;
-
-/// Why an element could not be evaluated (inverted element, material failure).
-#[derive(Debug, Clone, PartialEq)]
-pub struct ElementError(pub String);
-
-impl fmt::Display for ElementError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(&self.0)
-    }
-}
-
-impl std::error::Error for ElementError {}
 
 /// Cofactor matrix: A⁻ᵀ = cof(A) / det A without a failure branch.
 #[inline]
@@ -200,9 +188,10 @@ pub(super) fn element_kinematics<const N: usize, const G: usize>(
             Kinematics::Finite => {
                 let j = p.f.determinant();
                 if j.is_nan() || j <= 0.0 {
-                    return Err(ElementError(format!(
-                        "det F = {j:.3e} ≤ 0 at Gauss point {g} (element inverted)"
-                    )));
+                    return Err(ElementError::Inverted {
+                        at: At::Gauss(g),
+                        det: j,
+                    });
                 }
                 p.grad = transform_gradients(&(cofactor(&p.f) / j), &grad0);
                 vol[g] = j;
@@ -258,9 +247,10 @@ pub(super) fn reference_point<const N: usize>(
 ) -> Result<([[f64; 3]; N], f64), ElementError> {
     let (grad0, det0) = reference_gradients(x0, dn);
     if det0.is_nan() || det0 <= 0.0 {
-        return Err(ElementError(format!(
-            "reference det J = {det0:.3e} ≤ 0 at Gauss point {g}"
-        )));
+        return Err(ElementError::ReferenceInverted {
+            at: At::Gauss(g),
+            det: det0,
+        });
     }
     Ok((grad0, det0))
 }

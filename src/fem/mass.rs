@@ -8,7 +8,9 @@
 //! * Lumped mass: row sums of the consistent matrix, ρ ∫ N_a dV. For hex8 and tet4
 //!   the shape functions are non-negative, so every lumped mass is positive.
 
-use super::element::{element_force, reference_gradients, Formulation};
+use super::element::{element_force, ElementError, Formulation};
+use super::kernel::{ElementData, ElementOutput};
+use super::kinematics::reference_gradients;
 use super::shape::{HEX8, TET4};
 use crate::material::Material;
 use crate::mesh::ElemKind;
@@ -71,7 +73,7 @@ pub fn max_frequency(
     x0: &[[f64; 3]],
     mat: &dyn Material,
     state: &[f64],
-) -> Result<f64, String> {
+) -> Result<f64, ElementError> {
     let n = x0.len();
     let w = 3 * n;
     let zero = [[0.0; 3]; 8];
@@ -81,15 +83,9 @@ pub fn max_frequency(
     element_force(
         kind,
         form,
-        x0,
-        &zero[..n],
-        mat,
-        state,
-        &mut scratch,
-        &mut f[..w],
-        Some(&mut k),
-    )
-    .map_err(|e| e.0)?;
+        &ElementData::new(x0, &zero[..n], mat, state),
+        ElementOutput::new(&mut scratch, &mut f[..w], Some(&mut k)),
+    )?;
     let mut ml = [0.0; 8];
     lumped_mass(kind, x0, mat.density(), &mut ml[..n]);
     let s: Vec<f64> = (0..w).map(|i| 1.0 / ml[i / 3].sqrt()).collect();
@@ -129,7 +125,7 @@ mod tests {
     }
 
     fn volume(kind: ElemKind, x: &[[f64; 3]]) -> f64 {
-        crate::fem::element::element_volume(kind, x)
+        crate::fem::measure::element_volume(kind, x)
     }
 
     #[test]

@@ -3,9 +3,13 @@
 
 pub mod eas;
 pub mod element;
+pub mod error;
 pub mod hybrid;
+pub mod kernel;
 pub mod kinematics;
 pub mod mass;
+pub mod measure;
 pub mod reduced;
 pub mod shape;
+pub mod solid;
 pub mod surface;

@@ -22,9 +22,11 @@
 //! stays positive at any strain. The volumetric part is one constant per element, so
 //! nearly incompressible materials do not lock.
 
+use super::error::{material_at, At, ElementError};
+use super::kernel::{nodes, ElementData, ElementKernel, ElementOutput};
 use super::kinematics::{
     add_force, add_tangent, cofactor, deformation_gradient, reference_point, transform_gradients,
-    ElementError, LocalTangent,
+    LocalTangent,
 };
 use super::shape::{HEX8, HEX8_NODES};
 use crate::material::{Kinematics, Material};
@@ -109,9 +111,10 @@ fn reference(x0: &[[f64; 3]; 8], shear_modulus: f64) -> Result<Reference, Elemen
             energy += w[g] * dot(&grad, &grad);
         }
         if gh.is_nan() || gh.abs() < 1e-3 {
-            return Err(ElementError(format!(
-                "hourglass mode {alpha} is degenerate (γ·h = {gh:.3e})"
-            )));
+            return Err(ElementError::DegenerateHourglass {
+                mode: alpha,
+                gamma_h: gh,
+            });
         }
         k[alpha] = 10.0 / 9.0 * shear_modulus * energy / (gh * gh);
     }
@@ -135,40 +138,52 @@ fn point(
         Kinematics::Finite => {
             let j = f.determinant();
             if j.is_nan() || j <= 0.0 {
-                return Err(ElementError(format!(
-                    "det F = {j:.3e} ≤ 0 at the element centre (element inverted)"
-                )));
+                return Err(ElementError::Inverted {
+                    at: At::Centre,
+                    det: j,
+                });
             }
             Ok((f, transform_gradients(&(cofactor(&f) / j), &r.b)))
         }
     }
 }
 
-/// Internal force and optionally tangent (same layout as
-/// [`super::element::element_force`]) with the spring scaled by `hourglass`; history
-/// holds one point.
-#[allow(clippy::too_many_arguments)]
-pub(super) fn force(
-    x0: &[[f64; 3]; 8],
-    u: &[[f64; 3]; 8],
-    mat: &dyn Material,
-    hourglass: f64,
-    state_old: &[f64],
-    state_new: &mut [f64],
-    f: &mut [f64],
-    k: Option<&mut [f64]>,
-) -> Result<(), ElementError> {
+/// The reduced hex8 with its hourglass spring scaled by `hourglass`; history holds one
+/// point.
+#[derive(Debug, Clone, Copy)]
+pub struct Reduced {
+    pub hourglass: f64,
+}
+
+impl ElementKernel for Reduced {
+    fn n_nodes(&self) -> usize {
+        8
+    }
+    fn n_points(&self) -> usize {
+        1
+    }
+    fn force(&self, e: &ElementData, out: ElementOutput) -> Result<(), ElementError> {
+        force(e, self.hourglass, out)
+    }
+    fn stress(&self, e: &ElementData) -> Result<[f64; 6], ElementError> {
+        stress(nodes(e.x0), nodes(e.u), e.mat, e.state_old)
+    }
+}
+
+/// Internal force and optionally tangent with the spring scaled by `hourglass`.
+fn force(e: &ElementData, hourglass: f64, out: ElementOutput) -> Result<(), ElementError> {
+    let (mat, state_old) = (e.mat, e.state_old);
+    let ElementOutput { state_new, f, k } = out;
+    let u = nodes(e.u);
     assert_eq!(f.len(), 24, "force slice length");
     assert!(
         state_old.len() == mat.n_state() && state_new.len() == mat.n_state(),
         "history length must be n_state (one point)"
     );
-    let r = reference(x0, mat.shear_modulus())?;
+    let r = reference(nodes(e.x0), mat.shear_modulus())?;
     let kin = mat.kinematics();
     let (fm, grad) = point(&r, kin, u)?;
-    let merr = |e: crate::material::MaterialError| {
-        ElementError(format!("material at the element centre: {}", e.0))
-    };
+    let merr = material_at(At::Centre);
     f.fill(0.0);
     let k = match k {
         Some(k) => {
@@ -239,7 +254,7 @@ fn spring(r: &Reference, scale: f64, u: &[[f64; 3]; 8], f: &mut [f64], k: Option
 }
 
 /// Cauchy stress at the centre (the hourglass spring carries no stress).
-pub(super) fn stress(
+fn stress(
     x0: &[[f64; 3]; 8],
     u: &[[f64; 3]; 8],
     mat: &dyn Material,
@@ -251,7 +266,7 @@ pub(super) fn stress(
     let mut scratch = vec![0.0; mat.n_state()];
     let s = mat
         .evaluate_stress(&fm, state_old, &mut scratch)
-        .map_err(|e| ElementError(format!("material at the element centre: {}", e.0)))?;
+        .map_err(material_at(At::Centre))?;
     let j = match kin {
         Kinematics::Finite => fm.determinant(),
         Kinematics::Small => 1.0,
@@ -298,13 +313,8 @@ mod tests {
         element_force(
             ElemKind::Hex8,
             form,
-            x0,
-            u,
-            mat,
-            &old[..n],
-            &mut new[..n],
-            &mut f,
-            Some(&mut k),
+            &ElementData::new(x0, u, mat, &old[..n]),
+            ElementOutput::new(&mut new[..n], &mut f, Some(&mut k)),
         )
         .unwrap();
         let k = DMatrix::from_row_slice(24, 24, &k);

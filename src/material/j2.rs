@@ -96,9 +96,11 @@ impl J2Plasticity {
                 return Ok(dg);
             }
         }
-        Err(MaterialError(format!(
-            "J2: return mapping did not converge (q_tr = {q_tr:.6e}, ε̄p = {ep_n:.6e})"
-        )))
+        Err(MaterialError::ReturnMapping {
+            model: "J2",
+            q_trial: q_tr,
+            plastic_strain: ep_n,
+        })
     }
 }
 
@@ -127,15 +129,19 @@ impl J2Plasticity {
     ) -> Result<StressPoint, MaterialError> {
         check_f("J2", f)?;
         if state_old.len() < J2_N_STATE || state_new.len() < J2_N_STATE {
-            return Err(MaterialError(format!(
-                "J2: history needs {J2_N_STATE} values, got {} / {}",
-                state_old.len(),
-                state_new.len()
-            )));
+            return Err(MaterialError::HistoryLength {
+                model: "J2",
+                needs: J2_N_STATE,
+                old: state_old.len(),
+                new: state_new.len(),
+            });
         }
         let old = &state_old[..J2_N_STATE];
         if old.iter().any(|x| !x.is_finite()) {
-            return Err(MaterialError("J2: non-finite history".into()));
+            return Err(MaterialError::NonFinite {
+                model: "J2",
+                what: "history",
+            });
         }
         let cpi = if old[..6].iter().all(|&x| x == 0.0) {
             Matrix3::identity()
@@ -152,10 +158,10 @@ impl J2Plasticity {
         let q = eig.eigenvectors;
         let lam2 = eig.eigenvalues;
         if lam2.iter().any(|&x| !(x.is_finite() && x > 0.0)) {
-            return Err(MaterialError(format!(
-                "J2: trial elastic b has non-positive eigenvalues {:?}",
-                lam2.as_slice()
-            )));
+            return Err(MaterialError::NonPositiveStretch {
+                model: "J2",
+                eigenvalues: [lam2[0], lam2[1], lam2[2]],
+            });
         }
         let eps_tr: Vector3<f64> = lam2.map(|x| 0.5 * x.ln());
         let vol = eps_tr.sum();
@@ -191,7 +197,7 @@ impl J2Plasticity {
             let be = q * Matrix3::from_diagonal(&eps_e.map(|x| (2.0 * x).exp())) * q.transpose();
             let finv = f
                 .try_inverse()
-                .ok_or_else(|| MaterialError("J2: singular F".into()))?;
+                .ok_or(MaterialError::SingularF { model: "J2" })?;
             let cpi_new = finv * be * finv.transpose();
             state_new[..6].copy_from_slice(&to_voigt(&cpi_new));
             state_new[6] = ep_n + dg;
@@ -202,7 +208,10 @@ impl J2Plasticity {
         if !want_tangent {
             let stress = to_voigt(&tau);
             if stress.iter().any(|x| !x.is_finite()) {
-                return Err(MaterialError("J2: non-finite stress".into()));
+                return Err(MaterialError::NonFinite {
+                    model: "J2",
+                    what: "stress",
+                });
             }
             return Ok(StressPoint {
                 stress,
@@ -236,7 +245,10 @@ impl J2Plasticity {
             .chain(tangent.iter().flatten())
             .any(|x| !x.is_finite())
         {
-            return Err(MaterialError("J2: non-finite stress or tangent".into()));
+            return Err(MaterialError::NonFinite {
+                model: "J2",
+                what: "stress or tangent",
+            });
         }
         Ok(StressPoint { stress, tangent })
     }

@@ -8,6 +8,7 @@
 //!
 //! Voigt order everywhere: xx, yy, zz, xy, yz, xz (engineering shear strains in B).
 
+mod error;
 pub mod hardening;
 pub mod j2;
 pub mod linear_elastic;
@@ -17,6 +18,7 @@ mod tensor;
 #[cfg(test)]
 mod testing;
 
+pub use error::MaterialError;
 pub use hardening::Hardening;
 pub use j2::J2Plasticity;
 pub use linear_elastic::LinearElastic;
@@ -42,10 +44,6 @@ pub struct StressPoint {
     /// Spatial tangent c (finite) or elasticity tensor C (small), 6×6 Voigt.
     pub tangent: [[f64; 6]; 6],
 }
-
-/// Why a material could not be evaluated (e.g. an inverted point, J ≤ 0).
-#[derive(Debug, Clone, PartialEq)]
-pub struct MaterialError(pub String);
 
 pub trait Material: Send + Sync + std::fmt::Debug {
     fn kinematics(&self) -> Kinematics;

@@ -69,7 +69,10 @@ impl MooneyRivlin {
         if !want_tangent {
             let stress = to_voigt(&tau);
             if stress.iter().any(|x| !x.is_finite()) {
-                return Err(MaterialError("Mooney-Rivlin: non-finite stress".into()));
+                return Err(MaterialError::NonFinite {
+                    model: "Mooney-Rivlin",
+                    what: "stress",
+                });
             }
             return Ok(StressPoint {
                 stress,
@@ -105,9 +108,10 @@ impl MooneyRivlin {
             .chain(tangent.iter().flatten())
             .any(|x| !x.is_finite())
         {
-            return Err(MaterialError(
-                "Mooney-Rivlin: non-finite stress or tangent".into(),
-            ));
+            return Err(MaterialError::NonFinite {
+                model: "Mooney-Rivlin",
+                what: "stress or tangent",
+            });
         }
         Ok(StressPoint { stress, tangent })
     }

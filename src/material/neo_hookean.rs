@@ -38,9 +38,10 @@ impl Material for NeoHookean {
     ) -> Result<StressPoint, MaterialError> {
         let j = f.determinant();
         if j.is_nan() || j <= 0.0 {
-            return Err(MaterialError(format!(
-                "neo-Hookean: det F = {j:.3e} ≤ 0 (inverted)"
-            )));
+            return Err(MaterialError::Inverted {
+                model: "neo-Hookean",
+                det: j,
+            });
         }
         let (lambda, mu) = lame(self.e, self.nu);
         let lnj = j.ln();

@@ -144,17 +144,16 @@ pub(crate) fn rotate(t: &T4, q: &Matrix3<f64>) -> T4 {
 }
 
 /// Input check shared by the finite-strain models: finite F with det F > 0.
-pub(crate) fn check_f(name: &str, f: &Matrix3<f64>) -> Result<f64, super::MaterialError> {
+pub(crate) fn check_f(model: &'static str, f: &Matrix3<f64>) -> Result<f64, super::MaterialError> {
     if f.iter().any(|x| !x.is_finite()) {
-        return Err(super::MaterialError(format!(
-            "{name}: non-finite deformation gradient"
-        )));
+        return Err(super::MaterialError::NonFinite {
+            model,
+            what: "deformation gradient",
+        });
     }
     let j = f.determinant();
     if !(j.is_finite() && j > 0.0) {
-        return Err(super::MaterialError(format!(
-            "{name}: det F = {j:.3e} ≤ 0 (inverted)"
-        )));
+        return Err(super::MaterialError::Inverted { model, det: j });
     }
     Ok(j)
 }

@@ -447,7 +447,7 @@ pub fn ring_mesh(spec: &RingSpec, part: u32) -> Mesh {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::fem::element::check_reference;
+    use crate::fem::measure::check_reference;
     use std::f64::consts::PI;
 
     fn cyl(n: usize, quarter: bool) -> CylinderSpec {

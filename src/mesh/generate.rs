@@ -2,6 +2,7 @@
 //! patch tests.
 
 use super::{ElemKind, FaceRef, Mesh};
+use nalgebra::Vector3;
 
 /// A structured block. `grading[a]` is the ratio last cell size / first cell size along
 /// axis a (geometric progression, 1.0 = uniform).
@@ -202,14 +203,14 @@ const HEX_EDGES: [[usize; 2]; 12] = [
 ];
 const TET_EDGES: [[usize; 2]; 6] = [[0, 1], [0, 2], [0, 3], [1, 2], [1, 3], [2, 3]];
 
-fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-
-fn det3(a: [f64; 3], b: [f64; 3], c: [f64; 3]) -> f64 {
-    (a[1] * b[2] - a[2] * b[1]) * c[0]
-        + (a[2] * b[0] - a[0] * b[2]) * c[1]
-        + (a[0] * b[1] - a[1] * b[0]) * c[2]
+/// (b − a) × (c − a) · (d − a): six times the signed volume of the tet a b c d
+/// (nalgebra's cross and dot: the same products and sums, in the same order, as the
+/// hand-written triple product it replaced).
+fn triple(a: [f64; 3], b: [f64; 3], c: [f64; 3], d: [f64; 3]) -> f64 {
+    let a = Vector3::from(a);
+    (Vector3::from(b) - a)
+        .cross(&(Vector3::from(c) - a))
+        .dot(&(Vector3::from(d) - a))
 }
 
 /// Smallest corner Jacobian (hex8) or 6 x volume (tet4): what must stay positive.
@@ -217,10 +218,10 @@ fn min_corner_det(mesh: &Mesh, e: usize) -> f64 {
     let en = mesh.elem_nodes(e);
     let x = |l: usize| mesh.coords[en[l]];
     match mesh.kinds[e] {
-        ElemKind::Tet4 => det3(sub(x(1), x(0)), sub(x(2), x(0)), sub(x(3), x(0))),
+        ElemKind::Tet4 => triple(x(0), x(1), x(2), x(3)),
         ElemKind::Hex8 => HEX_CORNER_EDGES
             .iter()
-            .map(|&[c, a, b, d]| det3(sub(x(a), x(c)), sub(x(b), x(c)), sub(x(d), x(c))))
+            .map(|&[c, a, b, d]| triple(x(c), x(a), x(b), x(d)))
             .fold(f64::INFINITY, f64::min),
     }
 }
@@ -276,8 +277,8 @@ pub fn distort_interior(mesh: &mut Mesh, amount: f64, seed: u64) {
             ElemKind::Tet4 => &TET_EDGES,
         };
         for &[a, b] in edges {
-            let d = sub(mesh.coords[en[a]], mesh.coords[en[b]]);
-            let len = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+            let len =
+                (Vector3::from(mesh.coords[en[a]]) - Vector3::from(mesh.coords[en[b]])).norm();
             h[en[a]] = h[en[a]].min(len);
             h[en[b]] = h[en[b]].min(len);
         }
@@ -337,9 +338,7 @@ mod tests {
     fn volume(mesh: &Mesh, e: usize) -> f64 {
         let en = mesh.elem_nodes(e);
         let x = |l: usize| mesh.coords[en[l]];
-        let tet = |a: usize, b: usize, c: usize, d: usize| {
-            det3(sub(x(b), x(a)), sub(x(c), x(a)), sub(x(d), x(a))) / 6.0
-        };
+        let tet = |a: usize, b: usize, c: usize, d: usize| triple(x(a), x(b), x(c), x(d)) / 6.0;
         match mesh.kinds[e] {
             ElemKind::Tet4 => tet(0, 1, 2, 3),
             ElemKind::Hex8 => {
@@ -394,13 +393,8 @@ mod tests {
                     "{name}"
                 );
                 let x = |i: usize| m.coords[ns[i]];
-                let a = sub(x(1), x(0));
-                let b = sub(x(2), x(0));
-                let nrm = [
-                    a[1] * b[2] - a[2] * b[1],
-                    a[2] * b[0] - a[0] * b[2],
-                    a[0] * b[1] - a[1] * b[0],
-                ];
+                let p = |i: usize| Vector3::from(x(i));
+                let nrm = (p(1) - p(0)).cross(&(p(2) - p(0)));
                 assert!(nrm[axis] * sign > 0.0, "{name} normal");
             }
         }
@@ -457,8 +451,7 @@ mod tests {
                     m.node_groups.values().flatten().copied().collect();
                 let mut moved = 0;
                 for v in 0..m.n_nodes() {
-                    let d = sub(m.coords[v], m0.coords[v]);
-                    let len = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+                    let len = (Vector3::from(m.coords[v]) - Vector3::from(m0.coords[v])).norm();
                     if bnodes.contains(&v) {
                         assert_eq!(len, 0.0);
                     } else if len > 0.0 {

@@ -10,6 +10,7 @@ pub mod gmsh;
 pub mod select;
 pub mod sheet;
 
+use nalgebra::Vector3;
 use std::collections::BTreeMap;
 
 /// Element types. Node orderings follow Gmsh/VTK: hex8 bottom face 0-1-2-3
@@ -161,7 +162,10 @@ impl Mesh {
     pub fn elem_volume(&self, e: usize) -> f64 {
         let x: Vec<[f64; 3]> = self.elem_nodes(e).iter().map(|&n| self.coords[n]).collect();
         match self.kinds[e] {
-            ElemKind::Tet4 => det3(sub(x[1], x[0]), sub(x[2], x[0]), sub(x[3], x[0])) / 6.0,
+            ElemKind::Tet4 => {
+                let p = |i: usize| Vector3::from(x[i]);
+                (p(1) - p(0)).cross(&(p(2) - p(0))).dot(&(p(3) - p(0))) / 6.0
+            }
             ElemKind::Hex8 => {
                 const S: [f64; 8] = [-1.0, 1.0, 1.0, -1.0, -1.0, 1.0, 1.0, -1.0];
                 const T: [f64; 8] = [-1.0, -1.0, 1.0, 1.0, -1.0, -1.0, 1.0, 1.0];
@@ -183,7 +187,8 @@ impl Mesh {
                             }
                         }
                     }
-                    vol += det3(j[0], j[1], j[2]);
+                    let [j0, j1, j2] = j.map(Vector3::from);
+                    vol += j0.cross(&j1).dot(&j2);
                 }
                 vol
             }
@@ -211,15 +216,4 @@ impl Mesh {
         }
         h
     }
-}
-
-fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-
-/// (a x b) . c
-fn det3(a: [f64; 3], b: [f64; 3], c: [f64; 3]) -> f64 {
-    (a[1] * b[2] - a[2] * b[1]) * c[0]
-        + (a[2] * b[0] - a[0] * b[2]) * c[1]
-        + (a[0] * b[1] - a[1] * b[0]) * c[2]
 }

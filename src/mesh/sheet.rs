@@ -10,6 +10,7 @@
 use std::collections::{BTreeMap, HashMap};
 
 use super::{ElemKind, FaceRef, Mesh};
+use nalgebra::Vector3;
 
 /// A surface mesh as read (from Gmsh): quads and the physical groups on them.
 #[derive(Debug, Clone, Default)]
@@ -50,22 +51,10 @@ pub struct SheetSpec {
 /// an offset of more than twice the thickness: refused.
 const MIN_MITRE_COS: f64 = 0.5;
 
-fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
-fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-fn unit(a: [f64; 3]) -> Option<[f64; 3]> {
-    let n = dot(a, a).sqrt();
-    (n > 0.0 && n.is_finite()).then(|| [a[0] / n, a[1] / n, a[2] / n])
+/// a / |a|, or `None` for a zero or non-finite length.
+fn unit(a: Vector3<f64>) -> Option<Vector3<f64>> {
+    let n = a.norm();
+    (n > 0.0 && n.is_finite()).then(|| a / n)
 }
 
 /// Orient every quad like its neighbours across shared edges (breadth first from each
@@ -186,20 +175,20 @@ fn thickness_directions(
     let np = coords.len();
     // Corner normals, summed per node weighted by the corner's angle.
     let mut sum = vec![[0.0; 3]; np];
-    let mut corner_normals: Vec<Vec<[f64; 3]>> = vec![Vec::new(); np];
+    let mut corner_normals: Vec<Vec<Vector3<f64>>> = vec![Vec::new(); np];
     for (q, quad) in quads.iter().enumerate() {
         for i in 0..4 {
             let n = quad[i];
-            let a = sub(coords[quad[(i + 1) % 4]], coords[n]);
-            let b = sub(coords[quad[(i + 3) % 4]], coords[n]);
-            let Some(nrm) = unit(cross(a, b)) else {
+            let a = Vector3::from(coords[quad[(i + 1) % 4]]) - Vector3::from(coords[n]);
+            let b = Vector3::from(coords[quad[(i + 3) % 4]]) - Vector3::from(coords[n]);
+            let Some(nrm) = unit(a.cross(&b)) else {
                 let (line, tag) = s.quad_lines.get(q).copied().unwrap_or((0, q as u64));
                 return Err(format!(
                     "element {tag} (line {line}) is degenerate: two of its edges at the node at {:?} are parallel or of zero length",
                     coords[n]
                 ));
             };
-            let angle = (dot(a, b) / (dot(a, a) * dot(b, b)).sqrt())
+            let angle = (a.dot(&b) / (a.dot(&a) * b.dot(&b)).sqrt())
                 .clamp(-1.0, 1.0)
                 .acos();
             for k in 0..3 {
@@ -210,7 +199,7 @@ fn thickness_directions(
     }
     let mut dir = vec![[0.0; 3]; np];
     for n in 0..np {
-        let Some(u) = unit(sum[n]) else {
+        let Some(u) = unit(Vector3::from(sum[n])) else {
             return Err(format!(
                 "the quads at the node at {:?} fold back onto each other; no thickness direction",
                 coords[n]
@@ -218,7 +207,7 @@ fn thickness_directions(
         };
         let c = corner_normals[n]
             .iter()
-            .map(|&m| dot(u, m))
+            .map(|m| u.dot(m))
             .fold(f64::INFINITY, f64::min);
         if c < MIN_MITRE_COS {
             return Err(format!(
@@ -227,7 +216,7 @@ fn thickness_directions(
                 coords[n]
             ));
         }
-        dir[n] = u.map(|x| x / c);
+        dir[n] = u.map(|x| x / c).into();
     }
     Ok(dir)
 }

@@ -30,7 +30,7 @@ pub struct StableStep {
     /// Dilatational wave speed √((K + 4G/3)/ρ) of that element's material.
     pub wave_speed: f64,
     /// Per local element: its own stable step 2/ω_e and its reference thickness
-    /// ([`crate::fem::element::thickness`]), for [`Model::current_stable_time_step`].
+    /// ([`crate::fem::measure::thickness`]), for [`Model::current_stable_time_step`].
     pub elements: Vec<(f64, f64)>,
 }
 
@@ -220,7 +220,7 @@ impl Model {
                     .sqrt();
                     let dt = 2.0 / w;
                     let t =
-                        crate::fem::element::thickness(el.kinds[e], &x0[..n]).unwrap_or(f64::NAN);
+                        crate::fem::measure::thickness(el.kinds[e], &x0[..n]).unwrap_or(f64::NAN);
                     elements.push((dt, t));
                     if dt < best.0 {
                         best = (dt, cd * dt, cd);
@@ -277,7 +277,7 @@ impl Model {
                 ];
             }
             let ratio =
-                crate::fem::element::thickness(self.solids.elements.kinds[e], &x[..nodes.len()])
+                crate::fem::measure::thickness(self.solids.elements.kinds[e], &x[..nodes.len()])
                     .map_or(0.0, |t| (t / t_ref).min(1.0));
             dt = dt.min(dt_e * ratio);
         }

@@ -20,12 +20,12 @@ pub fn flat(a: &M3, s: f64) -> [f64; 9] {
     std::array::from_fn(|k| s * a[k / 3][k % 3])
 }
 
+/// a × b on the model's arrays, by nalgebra (the same products and differences as a
+/// hand-written cross product: bit for bit).
 pub fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
+    nalgebra::Vector3::from(a)
+        .cross(&nalgebra::Vector3::from(b))
+        .into()
 }
 
 pub const ID: M3 = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];

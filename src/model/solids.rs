@@ -9,12 +9,13 @@ use super::contribution::{
 use super::def::MaterialDef;
 use super::distribute::LocalElements;
 use super::dofs::{DofMap, Unknowns};
-use crate::fem::element::{
-    element_force, element_stress, n_gauss, state_len, von_mises, Formulation,
-};
-use crate::fem::hybrid;
+use crate::fem::element::kernel;
+use crate::fem::kernel::{ElementData, ElementKernel, ElementOutput};
+use crate::fem::measure::{char_length, von_mises};
 use crate::material::Material;
-use crate::mesh::ElemKind;
+
+/// Rows of the largest element: a hybrid hex8's 8 nodes and its pressure block.
+const MAX_DOFS: usize = 27;
 
 pub struct Solids {
     pub elements: LocalElements,
@@ -30,37 +31,51 @@ pub struct Solids {
     pub evaluations: u64,
     /// Parts whose largest element von Mises stress is a column `<part>.max_von_mises`.
     pub peak_stress_parts: Vec<(String, u32)>,
-    /// Per element, its pressure block among the hybrid elements (`u32::MAX`: none).
-    hybrid_index: Vec<u32>,
-    /// Local block of the first hybrid element's pressure block (set by `bind`).
-    hybrid_first: usize,
+    /// The distinct element kernels of this rank ([`crate::fem::element::kernel`] of
+    /// each kind and formulation), and each element's index into them.
+    kernels: Vec<Box<dyn ElementKernel>>,
+    kernel_of: Vec<u32>,
+    /// Per element, its first own block (a hybrid element's pressure) among the
+    /// elements' own blocks (`u32::MAX`: none).
+    own_index: Vec<u32>,
+    /// How many own blocks the local elements have.
+    n_own: usize,
+    /// Local block of the first element's first own block (set by `bind`).
+    own_first: usize,
 }
 
 impl Solids {
     pub fn new(elements: LocalElements, materials: &[(String, MaterialDef)]) -> Self {
         let built: Vec<Box<dyn Material>> = materials.iter().map(|(_, m)| m.build()).collect();
-        let mut state_offset = Vec::with_capacity(elements.len() + 1);
-        let mut s = 0;
-        for e in 0..elements.len() {
-            state_offset.push(s);
-            s += state_len(
-                elements.kinds[e],
-                elements.formulation[e],
-                built[elements.material[e] as usize].n_state(),
-            );
-        }
-        state_offset.push(s);
-        let mut n_hybrid = 0u32;
-        let hybrid_index = (0..elements.len())
+        let mut kernels: Vec<Box<dyn ElementKernel>> = Vec::new();
+        let mut distinct = Vec::new();
+        let kernel_of: Vec<u32> = (0..elements.len())
             .map(|e| {
-                if has_pressure(elements.kinds[e], elements.formulation[e]) {
-                    n_hybrid += 1;
-                    n_hybrid - 1
-                } else {
-                    u32::MAX
-                }
+                let key = (elements.kinds[e], elements.formulation[e]);
+                let i = distinct.iter().position(|k| *k == key).unwrap_or_else(|| {
+                    distinct.push(key);
+                    kernels.push(kernel(key.0, key.1));
+                    kernels.len() - 1
+                });
+                i as u32
             })
             .collect();
+        let mut state_offset = Vec::with_capacity(elements.len() + 1);
+        let mut s = 0;
+        let mut n_own = 0;
+        let mut own_index = Vec::with_capacity(elements.len());
+        for e in 0..elements.len() {
+            let k = &kernels[kernel_of[e] as usize];
+            state_offset.push(s);
+            s += k.state_len(built[elements.material[e] as usize].n_state());
+            own_index.push(if k.own_blocks() > 0 {
+                n_own as u32
+            } else {
+                u32::MAX
+            });
+            n_own += k.own_blocks();
+        }
+        state_offset.push(s);
         Self {
             elements,
             materials: built,
@@ -70,20 +85,32 @@ impl Solids {
             state_new: vec![0.0; s],
             evaluations: 0,
             peak_stress_parts: Vec::new(),
-            hybrid_index,
-            hybrid_first: 0,
+            kernels,
+            kernel_of,
+            own_index,
+            n_own,
+            own_first: 0,
         }
     }
 
-    /// Element e's pressure block (local), if it is a hybrid element.
-    fn pressure_block(&self, e: usize) -> Option<usize> {
-        let i = self.hybrid_index[e];
-        (i != u32::MAX).then(|| self.hybrid_first + i as usize)
+    /// Element e's kernel.
+    pub fn kernel(&self, e: usize) -> &dyn ElementKernel {
+        self.kernels[self.kernel_of[e] as usize].as_ref()
     }
 
-    /// How many local elements carry a pressure unknown.
+    /// Element e's own blocks (local): the first and how many (0: none).
+    fn own_blocks(&self, e: usize) -> (usize, usize) {
+        let i = self.own_index[e];
+        if i == u32::MAX {
+            (0, 0)
+        } else {
+            (self.own_first + i as usize, self.kernel(e).own_blocks())
+        }
+    }
+
+    /// How many own blocks the local elements carry (one per hybrid element).
     pub fn n_hybrid(&self) -> usize {
-        self.hybrid_index.iter().filter(|&&i| i != u32::MAX).count()
+        self.n_own
     }
 
     /// The displacement-only tangent at `u_local`, hybrid elements as F-bar (their
@@ -107,16 +134,10 @@ impl Solids {
             let mat = self.materials[self.elements.material[e] as usize].as_ref();
             let (s0, s1) = (self.state_offset[e], self.state_offset[e + 1]);
             scratch.resize(s1 - s0, 0.0);
-            let ok = element_force(
-                self.elements.kinds[e],
-                self.elements.formulation[e],
-                &x0[..n],
-                &ue[..n],
-                mat,
-                &self.state_old[s0..s1],
-                &mut scratch,
-                &mut fe[..3 * n],
-                Some(&mut ke[..9 * n * n]),
+            let kernel = self.kernel(e);
+            let ok = kernel.condensed().unwrap_or(kernel).force(
+                &ElementData::new(&x0[..n], &ue[..n], mat, &self.state_old[s0..s1]),
+                ElementOutput::new(&mut scratch, &mut fe[..3 * n], Some(&mut ke[..9 * n * n])),
             );
             if ok.is_ok() {
                 for (a, &node) in self.elements.nodes(e).iter().enumerate() {
@@ -182,7 +203,7 @@ impl Solids {
                     return 0.0;
                 }
                 // EAS keeps its enhanced parameters after the points' history.
-                let ng = n_gauss(self.elements.kinds[e], self.elements.formulation[e]);
+                let ng = self.kernel(e).n_points();
                 let pts = h[..ng * ns].chunks(ns);
                 let n = pts.len() as f64;
                 pts.map(|s| mat.equivalent_plastic_strain(s).unwrap_or(0.0))
@@ -200,25 +221,10 @@ impl Solids {
         (0..self.len())
             .map(|e| {
                 let n = self.gather(e, coords, u_local, &mut x0, &mut ue);
-                if let Some(pb) = self.pressure_block(e) {
-                    return hybrid::stress(
-                        &x0,
-                        &ue,
-                        u_local[3 * pb],
-                        self.material(e),
-                        self.history(e),
-                    )
-                    .unwrap_or([f64::NAN; 6]);
-                }
-                element_stress(
-                    self.elements.kinds[e],
-                    self.elements.formulation[e],
-                    &x0[..n],
-                    &ue[..n],
-                    self.material(e),
-                    self.history(e),
-                )
-                .unwrap_or([f64::NAN; 6])
+                let (ob, no) = self.own_blocks(e);
+                let data = ElementData::new(&x0[..n], &ue[..n], self.material(e), self.history(e))
+                    .with_own(&u_local[3 * ob..3 * (ob + no)]);
+                self.kernel(e).stress(&data).unwrap_or([f64::NAN; 6])
             })
             .collect()
     }
@@ -228,16 +234,10 @@ impl Solids {
         (0..self.len())
             .map(|e| {
                 let x0: Vec<[f64; 3]> = self.elements.nodes(e).iter().map(|&n| coords[n]).collect();
-                crate::fem::element::char_length(self.elements.kinds[e], &x0)
+                char_length(self.elements.kinds[e], &x0)
             })
             .sum()
     }
-}
-
-/// Whether an element of this kind and formulation carries a pressure unknown (a hybrid
-/// hex8; the formulation leaves tet4 alone).
-fn has_pressure(kind: ElemKind, form: Formulation) -> bool {
-    kind == ElemKind::Hex8 && form.is_hybrid()
 }
 
 impl Contribution for Solids {
@@ -254,7 +254,7 @@ impl Contribution for Solids {
     }
 
     fn bind(&mut self, dofs: &DofMap, index: usize) {
-        self.hybrid_first = dofs.placed(index).owned_local;
+        self.own_first = dofs.placed(index).owned_local;
     }
 
     fn pattern(&self, dofs: &DofMap, out: &mut Vec<(usize, usize)>) {
@@ -265,7 +265,8 @@ impl Contribution for Solids {
                     out.push((dofs.global_block(a), dofs.global_block(b)));
                 }
             }
-            if let Some(p) = self.pressure_block(e) {
+            let (ob, no) = self.own_blocks(e);
+            for p in ob..ob + no {
                 let gp = dofs.global_block(p);
                 out.push((gp, gp));
                 for &a in nodes {
@@ -283,96 +284,54 @@ impl Contribution for Solids {
         let mut failure: Option<String> = None;
         let mut x0 = [[0.0; 3]; 8];
         let mut ue = [[0.0; 3]; 8];
-        let mut fe = [0.0; hybrid::DOFS];
+        let mut fe = [0.0; MAX_DOFS];
         let want_k = ev.jacobian.is_some();
-        let mut ke = vec![
-            0.0;
-            if want_k {
-                hybrid::DOFS * hybrid::DOFS
-            } else {
-                0
-            }
-        ];
-        let mut blocks = [0usize; 9];
+        let mut ke = vec![0.0; if want_k { MAX_DOFS * MAX_DOFS } else { 0 }];
+        let mut blocks = [0usize; MAX_DOFS / 3];
         for e in 0..self.len() {
             let n = self.gather(e, ev.coords, ev.u, &mut x0, &mut ue);
             let mat = self.materials[self.elements.material[e] as usize].as_ref();
             let (s0, s1) = (self.state_offset[e], self.state_offset[e + 1]);
-            if let Some(pb) = self.pressure_block(e) {
-                let Formulation::Hybrid { hourglass } = self.elements.formulation[e] else {
-                    unreachable!("a pressure block belongs to a hybrid element")
-                };
-                let pi = [ev.u[3 * pb], ev.u[3 * pb + 1], ev.u[3 * pb + 2]];
-                let res = hybrid::force(
-                    &x0,
-                    &ue,
-                    &pi,
-                    mat,
-                    hourglass,
-                    &self.state_old[s0..s1],
+            let (ob, no) = self.own_blocks(e);
+            let kernel = self.kernels[self.kernel_of[e] as usize].as_ref();
+            let nd = kernel.n_dofs();
+            let res = kernel.force(
+                &ElementData::new(&x0[..n], &ue[..n], mat, &self.state_old[s0..s1])
+                    .with_own(&ev.u[3 * ob..3 * (ob + no)]),
+                ElementOutput::new(
                     &mut self.state_new[s0..s1],
-                    &mut fe,
-                    if want_k { Some(&mut ke[..]) } else { None },
-                );
-                if let Err(err) = res {
-                    failure.get_or_insert_with(|| {
-                        format!("element {}: {}", self.elements.orig[e], err.0)
-                    });
-                    continue;
-                }
-                let nodes = self.elements.nodes(e);
-                if let Some((f, _)) = ev.forces.as_mut() {
-                    for (a, &node) in nodes.iter().enumerate() {
-                        for c in 0..3 {
-                            f[3 * node + c] += fe[3 * a + c];
-                        }
-                    }
-                    for c in 0..3 {
-                        f[3 * pb + c] += fe[24 + c];
-                    }
-                }
-                if let Some(k) = ev.jacobian.as_deref_mut() {
-                    for (a, &node) in nodes.iter().enumerate() {
-                        blocks[a] = ev.dofs.global_block(node);
-                    }
-                    blocks[8] = ev.dofs.global_block(pb);
-                    k.add_element(&blocks, &ke);
-                }
-                continue;
-            }
-            let res = element_force(
-                self.elements.kinds[e],
-                self.elements.formulation[e],
-                &x0[..n],
-                &ue[..n],
-                mat,
-                &self.state_old[s0..s1],
-                &mut self.state_new[s0..s1],
-                &mut fe[..3 * n],
-                if want_k {
-                    Some(&mut ke[..9 * n * n])
-                } else {
-                    None
-                },
+                    &mut fe[..nd],
+                    if want_k {
+                        Some(&mut ke[..nd * nd])
+                    } else {
+                        None
+                    },
+                ),
             );
             if let Err(err) = res {
-                failure
-                    .get_or_insert_with(|| format!("element {}: {}", self.elements.orig[e], err.0));
+                failure.get_or_insert_with(|| format!("element {}: {err}", self.elements.orig[e]));
                 continue;
             }
-            let nodes = self.elements.nodes(e);
+            // The nodes' blocks, then the element's own.
+            for (a, &node) in self.elements.nodes(e).iter().enumerate() {
+                blocks[a] = node;
+            }
+            for (b, p) in (ob..ob + no).enumerate() {
+                blocks[n + b] = p;
+            }
+            let blocks = &mut blocks[..n + no];
             if let Some((f, _)) = ev.forces.as_mut() {
-                for (a, &node) in nodes.iter().enumerate() {
+                for (&block, fa) in blocks.iter().zip(fe.chunks_exact(3)) {
                     for c in 0..3 {
-                        f[3 * node + c] += fe[3 * a + c];
+                        f[3 * block + c] += fa[c];
                     }
                 }
             }
             if let Some(k) = ev.jacobian.as_deref_mut() {
-                for (a, &node) in nodes.iter().enumerate() {
-                    blocks[a] = ev.dofs.global_block(node);
+                for b in blocks.iter_mut() {
+                    *b = ev.dofs.global_block(*b);
                 }
-                k.add_element(&blocks[..n], &ke[..9 * n * n]);
+                k.add_element(blocks, &ke[..nd * nd]);
             }
         }
         self.evaluations += self.len() as u64;

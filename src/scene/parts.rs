@@ -3,7 +3,8 @@
 
 use super::check::err;
 use super::deck::*;
-use crate::fem::element::{check_reference, Formulation};
+use crate::fem::element::Formulation;
+use crate::fem::measure::check_reference;
 use crate::material::Hardening;
 use crate::mesh::cylinder::{cylinder_mesh, ring_mesh, CylinderSpec, RingSpec};
 use crate::mesh::generate::{box_mesh, distort_interior, BoxSpec};

@@ -16,19 +16,8 @@ use crate::mesh::select::tributary_areas;
 use crate::model::body::BodyDef;
 use crate::model::walls::WallDef;
 use crate::Result;
+use nalgebra::Vector3;
 use std::collections::BTreeSet;
-
-fn norm(a: [f64; 3]) -> f64 {
-    (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt()
-}
-
-fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
 
 /// Free DOFs of an entity and their loads.
 type FreeDofs = ([bool; 6], [Option<(f64, Curve)>; 6]);
@@ -393,14 +382,14 @@ fn wall_axes(w: &WallDeck, f: &str) -> Result<[[f64; 3]; 3]> {
         guess[1] - d * ez[1],
         guess[2] - d * ez[2],
     ];
-    if norm(ex) < 1e-6 {
+    if Vector3::from(ex).norm() < 1e-6 {
         return Err(err(
             format!("{f}.x_axis"),
             "must not be parallel to `normal`",
         ));
     }
     let ex = unit(format!("{f}.x_axis"), ex)?;
-    let ey = cross(ez, ex);
+    let ey = Vector3::from(ez).cross(&Vector3::from(ex)).into();
     Ok([ex, ey, ez])
 }
 
