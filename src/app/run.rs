@@ -248,9 +248,16 @@ pub fn run(comm: &dyn Comm, opts: &RunOptions) -> Result<RunOutcome> {
             })
     });
     let res = written.and_then(|_| {
-        execute(
-            comm, opts, model, settings, origin, record, &out, t_start, phases, &mut log, restart,
-        )
+        let run = Prepared {
+            model,
+            settings,
+            restart,
+            origin,
+            record,
+            t_start,
+            phases,
+        };
+        execute(comm, opts, &out, &mut log, run)
     });
     match &res {
         Ok(o) => log.file_only(&o.summary.headline()),
@@ -552,21 +559,36 @@ fn log_failed_attempts(
     iters.step(last_step + 1, &failed, false);
 }
 
+/// What [`run`] has set up for [`execute`]: the model and its settings, the restart
+/// state, and what the summary reports of the set-up (partition origin, the run's
+/// record, its start and phase times so far).
+struct Prepared {
+    model: Model,
+    settings: RunSettings,
+    restart: Option<Restart>,
+    origin: String,
+    record: RunRecord,
+    t_start: Instant,
+    phases: Phases,
+}
+
 /// The analysis, the outputs and the summary of [`run`].
-#[allow(clippy::too_many_arguments)]
 fn execute(
     comm: &dyn Comm,
     opts: &RunOptions,
-    mut model: Model,
-    settings: RunSettings,
-    origin: String,
-    record: RunRecord,
     out: &std::path::Path,
-    t_start: Instant,
-    mut phases: Phases,
     log: &mut Log,
-    restart: Option<Restart>,
+    run: Prepared,
 ) -> Result<RunOutcome> {
+    let Prepared {
+        mut model,
+        settings,
+        restart,
+        origin,
+        record,
+        t_start,
+        mut phases,
+    } = run;
     let scene = settings.name.clone();
     let analysis = &settings.analysis;
     let mut writer = ResultsWriter::create(
