@@ -6,7 +6,7 @@
 mod common;
 use alfe::linalg::LinearOperator;
 use alfe::parallel::{Comm, SerialComm};
-use alfe::solve::nonlinear::jfnk::FdJacobian;
+use alfe::solve::nonlinear::jfnk::{FdJacobian, FdStep};
 use alfe::solve::nonlinear::{FdRule, NonlinearProblem, SolverKind};
 use alfe::solve::stepping::StaticProblem;
 use common::*;
@@ -153,7 +153,13 @@ fn fd_product_matches_assembled_jacobian() {
         k.spmv(&comm, &v, &mut kv);
         for rule in [FdRule::Element, FdRule::WalkerPernice] {
             let p: &mut dyn NonlinearProblem = &mut prob;
-            let mut op = FdJacobian::new(p, &u, &r0, &is_c, rule, 1e-4, h, un);
+            let step = FdStep {
+                rule,
+                delta: 1e-4,
+                h,
+                u_norm: un,
+            };
+            let mut op = FdJacobian::new(p, &u, &r0, &is_c, step);
             let mut y = vec![0.0; n];
             op.apply(&comm, &v, &mut y).unwrap();
             let (mut num, mut den) = (0.0, 0.0);

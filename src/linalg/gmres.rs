@@ -103,43 +103,11 @@ pub fn gmres(
     }
     let tol = (opts.rtol * bnorm).max(opts.atol);
 
-    // Work space, allocated once.
-    let mut v = vec![0.0; (m + 1) * n];
-    let mut h = vec![0.0; (m + 1) * m]; // column-major, column k has m+1 rows
-    let mut cs = vec![0.0; m];
-    let mut sn = vec![0.0; m];
-    let mut g = vec![0.0; m + 1];
-    let mut y = vec![0.0; m];
-    let mut hbuf = vec![0.0; m + 2];
-    let mut colnorm = vec![0.0; m]; // ‖A M⁻¹ v_k‖
-    let mut r = vec![0.0; n];
-    let mut z = vec![0.0; n];
-
+    let mut ws = Workspace::new(n, m, tol, opts.max_iterations);
     let mut first = true;
     let mut last_cycle: Option<(f64, bool)> = None; // (β at cycle start, breakdown)
     loop {
-        // True residual r = b − A x.
-        if first && x_is_zero {
-            r.copy_from_slice(b);
-        } else {
-            let t = Instant::now();
-            a.apply(comm, x, &mut r)?;
-            st.seconds_in_operator += t.elapsed().as_secs_f64();
-            for (ri, bi) in r.iter_mut().zip(b) {
-                *ri = bi - *ri;
-            }
-        }
-        let mut s = [dot_local(&r, &r)];
-        comm.allreduce_sum(&mut s);
-        st.reductions += 1;
-        let beta = s[0].sqrt();
-        st.residual_norm = beta;
-        if !beta.is_finite() {
-            return Err(Error::convergence(format!(
-                "GMRES: the residual became non-finite after {} iterations",
-                st.iterations
-            )));
-        }
+        let beta = ws.true_residual(comm, a, b, x, first && x_is_zero, &mut st)?;
         if beta <= tol {
             st.converged = true;
             break;
@@ -164,88 +132,114 @@ pub fn gmres(
             st.restarts += 1;
         }
         first = false;
+        let (k, breakdown) = ws.cycle(comm, a, pc, beta, &mut st)?;
+        ws.update_solution(comm, pc, x, (k, breakdown), &mut st);
+        last_cycle = Some((beta, breakdown));
+    }
+    Ok(st)
+}
 
-        // Arnoldi cycle.
-        for (vi, ri) in v[..n].iter_mut().zip(&r) {
+/// The work space of a GMRES solve, allocated once: the Krylov basis, the Hessenberg
+/// matrix with its Givens rotations, and the vectors of a cycle.
+struct Workspace {
+    n: usize,
+    /// Krylov vectors per cycle.
+    m: usize,
+    /// The absolute tolerance on the residual and the iteration budget.
+    tol: f64,
+    max_iterations: usize,
+    v: Vec<f64>,
+    /// Column-major, column k has m+1 rows.
+    h: Vec<f64>,
+    cs: Vec<f64>,
+    sn: Vec<f64>,
+    g: Vec<f64>,
+    y: Vec<f64>,
+    hbuf: Vec<f64>,
+    /// ‖A M⁻¹ v_k‖.
+    colnorm: Vec<f64>,
+    r: Vec<f64>,
+    z: Vec<f64>,
+}
+
+impl Workspace {
+    fn new(n: usize, m: usize, tol: f64, max_iterations: usize) -> Self {
+        Self {
+            n,
+            m,
+            tol,
+            max_iterations,
+            v: vec![0.0; (m + 1) * n],
+            h: vec![0.0; (m + 1) * m],
+            cs: vec![0.0; m],
+            sn: vec![0.0; m],
+            g: vec![0.0; m + 1],
+            y: vec![0.0; m],
+            hbuf: vec![0.0; m + 2],
+            colnorm: vec![0.0; m],
+            r: vec![0.0; n],
+            z: vec![0.0; n],
+        }
+    }
+
+    /// The true residual r = b − A x (b itself for a zero guess) and its norm β, also
+    /// recorded as the statistics' residual norm. `Err` when β is not finite.
+    fn true_residual(
+        &mut self,
+        comm: &dyn Comm,
+        a: &mut dyn LinearOperator,
+        b: &[f64],
+        x: &[f64],
+        zero_guess: bool,
+        st: &mut GmresStats,
+    ) -> crate::Result<f64> {
+        let r = &mut self.r;
+        if zero_guess {
+            r.copy_from_slice(b);
+        } else {
+            let t = Instant::now();
+            a.apply(comm, x, r)?;
+            st.seconds_in_operator += t.elapsed().as_secs_f64();
+            for (ri, bi) in r.iter_mut().zip(b) {
+                *ri = bi - *ri;
+            }
+        }
+        let mut s = [dot_local(r, r)];
+        comm.allreduce_sum(&mut s);
+        st.reductions += 1;
+        let beta = s[0].sqrt();
+        st.residual_norm = beta;
+        if !beta.is_finite() {
+            return Err(Error::convergence(format!(
+                "GMRES: the residual became non-finite after {} iterations",
+                st.iterations
+            )));
+        }
+        Ok(beta)
+    }
+
+    /// One Arnoldi cycle from the residual `r` of norm `beta`: columns until the cycle
+    /// is full, the budget is spent, the residual estimate meets the tolerance or the
+    /// space breaks down. Returns the columns done and whether it broke down.
+    fn cycle(
+        &mut self,
+        comm: &dyn Comm,
+        a: &mut dyn LinearOperator,
+        pc: &dyn Preconditioner,
+        beta: f64,
+        st: &mut GmresStats,
+    ) -> crate::Result<(usize, bool)> {
+        let n = self.n;
+        for (vi, ri) in self.v[..n].iter_mut().zip(&self.r) {
             *vi = ri / beta;
         }
-        g.fill(0.0);
-        g[0] = beta;
+        self.g.fill(0.0);
+        self.g[0] = beta;
         let mut k = 0; // columns done
         let mut breakdown = false;
-        while k < m && st.iterations < opts.max_iterations {
-            let (basis, rest) = v.split_at_mut((k + 1) * n);
-            let w = &mut rest[..n];
-            let vk = &basis[k * n..];
-            let t = Instant::now();
-            pc.apply(comm, vk, &mut z);
-            st.seconds_in_preconditioner += t.elapsed().as_secs_f64();
-            let t = Instant::now();
-            a.apply(comm, &z, w)?;
-            st.seconds_in_operator += t.elapsed().as_secs_f64();
-            st.iterations += 1;
-
-            // CGS pass 1: h₁ = Vᵀw, w ← w − V h₁.
-            for (i, hi) in hbuf[..=k].iter_mut().enumerate() {
-                *hi = dot_local(&basis[i * n..(i + 1) * n], w);
-            }
-            comm.allreduce_sum(&mut hbuf[..=k]);
-            st.reductions += 1;
-            let hk = &mut h[k * (m + 1)..(k + 1) * (m + 1)];
-            hk[..=k].copy_from_slice(&hbuf[..=k]);
-            let h1_sq: f64 = hbuf[..=k].iter().map(|x| x * x).sum();
-            subtract_combination(w, basis, &hbuf[..=k], n);
-
-            // CGS pass 2 with ‖w₁‖² in the same reduction.
-            for (i, hi) in hbuf[..=k].iter_mut().enumerate() {
-                *hi = dot_local(&basis[i * n..(i + 1) * n], w);
-            }
-            hbuf[k + 1] = dot_local(w, w);
-            comm.allreduce_sum(&mut hbuf[..=k + 1]);
-            st.reductions += 1;
-            let w1_sq = hbuf[k + 1];
-            let h2_sq: f64 = hbuf[..=k].iter().map(|x| x * x).sum();
-            for (hi, h2) in hk[..=k].iter_mut().zip(&hbuf[..=k]) {
-                *hi += h2;
-            }
-            subtract_combination(w, basis, &hbuf[..=k], n);
-            let mut w2_sq = w1_sq - h2_sq;
-            if w2_sq < 1e-4 * w1_sq {
-                let mut s = [dot_local(w, w)];
-                comm.allreduce_sum(&mut s);
-                st.reductions += 1;
-                w2_sq = s[0];
-            }
-            let hnext = w2_sq.max(0.0).sqrt();
-            let az_norm = (h1_sq + w1_sq).sqrt();
-            if !hnext.is_finite() || !az_norm.is_finite() {
-                return Err(Error::convergence(format!(
-                    "GMRES: non-finite Arnoldi vector at iteration {}",
-                    st.iterations
-                )));
-            }
-            hk[k + 1] = hnext;
-            colnorm[k] = az_norm;
-
-            // Apply the previous rotations to the new column, then a new one.
-            for i in 0..k {
-                let t = cs[i] * hk[i] + sn[i] * hk[i + 1];
-                hk[i + 1] = -sn[i] * hk[i] + cs[i] * hk[i + 1];
-                hk[i] = t;
-            }
-            let (p, q) = (hk[k], hk[k + 1]);
-            let rho = p.hypot(q);
-            let (c, s) = if rho == 0.0 {
-                (1.0, 0.0)
-            } else {
-                (p / rho, q / rho)
-            };
-            cs[k] = c;
-            sn[k] = s;
-            hk[k] = rho;
-            hk[k + 1] = 0.0;
-            g[k + 1] = -s * g[k];
-            g[k] *= c;
+        while k < self.m && st.iterations < self.max_iterations {
+            let (hnext, az_norm) = self.arnoldi(comm, a, pc, k, st)?;
+            self.rotate(k);
             k += 1;
 
             if hnext <= BREAKDOWN * az_norm {
@@ -253,18 +247,125 @@ pub fn gmres(
                 break;
             }
             let inv = 1.0 / hnext;
-            for wi in w.iter_mut() {
+            for wi in self.v[k * n..(k + 1) * n].iter_mut() {
                 *wi *= inv;
             }
-            if g[k].abs() <= tol {
+            if self.g[k].abs() <= self.tol {
                 break;
             }
         }
+        Ok((k, breakdown))
+    }
 
+    /// The Arnoldi step of column `k`: w = A M⁻¹ v_k orthogonalised against the basis by
+    /// CGS2 (unnormalised, in the basis's next slot), the column `h_k` with
+    /// `h_{k+1,k} = ‖w‖`. Returns ‖w‖ and ‖A M⁻¹ v_k‖.
+    fn arnoldi(
+        &mut self,
+        comm: &dyn Comm,
+        a: &mut dyn LinearOperator,
+        pc: &dyn Preconditioner,
+        k: usize,
+        st: &mut GmresStats,
+    ) -> crate::Result<(f64, f64)> {
+        let (n, m) = (self.n, self.m);
+        let hbuf = &mut self.hbuf;
+        let (basis, rest) = self.v.split_at_mut((k + 1) * n);
+        let w = &mut rest[..n];
+        let vk = &basis[k * n..];
+        let t = Instant::now();
+        pc.apply(comm, vk, &mut self.z);
+        st.seconds_in_preconditioner += t.elapsed().as_secs_f64();
+        let t = Instant::now();
+        a.apply(comm, &self.z, w)?;
+        st.seconds_in_operator += t.elapsed().as_secs_f64();
+        st.iterations += 1;
+
+        // CGS pass 1: h₁ = Vᵀw, w ← w − V h₁.
+        for (i, hi) in hbuf[..=k].iter_mut().enumerate() {
+            *hi = dot_local(&basis[i * n..(i + 1) * n], w);
+        }
+        comm.allreduce_sum(&mut hbuf[..=k]);
+        st.reductions += 1;
+        let hk = &mut self.h[k * (m + 1)..(k + 1) * (m + 1)];
+        hk[..=k].copy_from_slice(&hbuf[..=k]);
+        let h1_sq: f64 = hbuf[..=k].iter().map(|x| x * x).sum();
+        subtract_combination(w, basis, &hbuf[..=k], n);
+
+        // CGS pass 2 with ‖w₁‖² in the same reduction.
+        for (i, hi) in hbuf[..=k].iter_mut().enumerate() {
+            *hi = dot_local(&basis[i * n..(i + 1) * n], w);
+        }
+        hbuf[k + 1] = dot_local(w, w);
+        comm.allreduce_sum(&mut hbuf[..=k + 1]);
+        st.reductions += 1;
+        let w1_sq = hbuf[k + 1];
+        let h2_sq: f64 = hbuf[..=k].iter().map(|x| x * x).sum();
+        for (hi, h2) in hk[..=k].iter_mut().zip(&hbuf[..=k]) {
+            *hi += h2;
+        }
+        subtract_combination(w, basis, &hbuf[..=k], n);
+        let mut w2_sq = w1_sq - h2_sq;
+        if w2_sq < 1e-4 * w1_sq {
+            let mut s = [dot_local(w, w)];
+            comm.allreduce_sum(&mut s);
+            st.reductions += 1;
+            w2_sq = s[0];
+        }
+        let hnext = w2_sq.max(0.0).sqrt();
+        let az_norm = (h1_sq + w1_sq).sqrt();
+        if !hnext.is_finite() || !az_norm.is_finite() {
+            return Err(Error::convergence(format!(
+                "GMRES: non-finite Arnoldi vector at iteration {}",
+                st.iterations
+            )));
+        }
+        hk[k + 1] = hnext;
+        self.colnorm[k] = az_norm;
+        Ok((hnext, az_norm))
+    }
+
+    /// Apply the previous Givens rotations to column `k`, then a new one that zeroes
+    /// its subdiagonal, and rotate the residual vector `g` with it.
+    fn rotate(&mut self, k: usize) {
+        let m = self.m;
+        let (cs, sn, g) = (&mut self.cs, &mut self.sn, &mut self.g);
+        let hk = &mut self.h[k * (m + 1)..(k + 1) * (m + 1)];
+        for i in 0..k {
+            let t = cs[i] * hk[i] + sn[i] * hk[i + 1];
+            hk[i + 1] = -sn[i] * hk[i] + cs[i] * hk[i + 1];
+            hk[i] = t;
+        }
+        let (p, q) = (hk[k], hk[k + 1]);
+        let rho = p.hypot(q);
+        let (c, s) = if rho == 0.0 {
+            (1.0, 0.0)
+        } else {
+            (p / rho, q / rho)
+        };
+        cs[k] = c;
+        sn[k] = s;
+        hk[k] = rho;
+        hk[k + 1] = 0.0;
+        g[k + 1] = -s * g[k];
+        g[k] *= c;
+    }
+
+    /// The end of a cycle of `k` columns: y = R⁻¹ g and x += M⁻¹ (V y).
+    fn update_solution(
+        &mut self,
+        comm: &dyn Comm,
+        pc: &dyn Preconditioner,
+        x: &mut [f64],
+        (k, breakdown): (usize, bool),
+        st: &mut GmresStats,
+    ) {
+        let (n, m) = (self.n, self.m);
+        let (h, g, y) = (&self.h, &self.g, &mut self.y);
         // y = R⁻¹ g (upper triangular, k×k). Only the column of a breakdown can have a
         // negligible pivot (A M⁻¹ singular on the Krylov space): drop it.
         let mut kk = k;
-        if breakdown && h[(k - 1) * (m + 1) + k - 1].abs() <= BREAKDOWN * colnorm[k - 1] {
+        if breakdown && h[(k - 1) * (m + 1) + k - 1].abs() <= BREAKDOWN * self.colnorm[k - 1] {
             kk -= 1;
         }
         for i in (0..kk).rev() {
@@ -275,21 +376,20 @@ pub fn gmres(
             y[i] = s / h[i * (m + 1) + i];
         }
         // x += M⁻¹ (V y); r is free until the next true residual.
+        let r = &mut self.r;
         r.fill(0.0);
         for (j, &yj) in y[..kk].iter().enumerate() {
-            for (ri, vi) in r.iter_mut().zip(&v[j * n..(j + 1) * n]) {
+            for (ri, vi) in r.iter_mut().zip(&self.v[j * n..(j + 1) * n]) {
                 *ri += yj * vi;
             }
         }
         let t = Instant::now();
-        pc.apply(comm, &r, &mut z);
+        pc.apply(comm, r, &mut self.z);
         st.seconds_in_preconditioner += t.elapsed().as_secs_f64();
-        for (xi, zi) in x.iter_mut().zip(&z) {
+        for (xi, zi) in x.iter_mut().zip(&self.z) {
             *xi += zi;
         }
-        last_cycle = Some((beta, breakdown));
     }
-    Ok(st)
 }
 
 #[inline]

@@ -7,7 +7,7 @@ use crate::linalg::matrix::DistMatrix;
 use crate::model::Model;
 use crate::parallel::Comm;
 use crate::solve::control::StepControl;
-use crate::solve::nonlinear::{solve, NonlinearOptions, NonlinearProblem, Preconditioning};
+use crate::solve::nonlinear::{NonlinearOptions, NonlinearProblem, Preconditioning, Solver};
 pub use crate::solve::record::{Attempt, Flow, Resume, RunTotals, StageTotals, StepRecord};
 use crate::solve::{Analysis, Predictor};
 use crate::Result;
@@ -29,6 +29,17 @@ impl NonlinearProblem for StaticProblem<'_> {
     fn jacobian(&mut self, comm: &dyn Comm, u: &[f64], k: &mut DistMatrix) -> Result<()> {
         self.model.jacobian(comm, u, self.time, k)
     }
+}
+
+/// The nonlinear solver of a run on `model`: its Jacobian's storage and the
+/// preconditioner `opts` ask for (given the node points when it needs them).
+pub fn model_solver<'o>(comm: &dyn Comm, model: &Model, opts: &'o NonlinearOptions) -> Solver<'o> {
+    let k = model.new_matrix(comm);
+    let mut pc = Preconditioning::new(opts.preconditioner, opts.pc_lag, opts.factor_options());
+    if opts.rigid_body_modes || opts.preconditioner.wants_points() || opts.export_system.is_some() {
+        pc = pc.with_points(model.node_points(), opts.rigid_body_modes);
+    }
+    Solver::new(opts, k, pc)
 }
 
 /// Called with every converged step, its solution, the model (output, progress) and
@@ -54,11 +65,7 @@ pub fn run_static(
     let n = model.n_owned_dofs();
     u.resize(n, 0.0);
     let mut r = vec![0.0; n];
-    let mut k = model.new_matrix(comm);
-    let mut pc = Preconditioning::new(opts.preconditioner, opts.pc_lag, opts.factor_options());
-    if opts.rigid_body_modes || opts.preconditioner.wants_points() || opts.export_system.is_some() {
-        pc = pc.with_points(model.node_points(), opts.rigid_body_modes);
-    }
+    let mut solver = model_solver(comm, model, opts);
     let mut tot = RunTotals::default();
     let mut t0 = Instant::now();
     // The last converged increment and its step, for the predictor.
@@ -84,9 +91,7 @@ pub fn run_static(
         }
         let stats = {
             let mut prob = StaticProblem { model, time: t };
-            solve(
-                comm, &mut prob, &mut trial, &mut r, &g, &mut k, &mut pc, opts,
-            )?
+            solver.solve(comm, &mut prob, &mut trial, &mut r, &g)?
         };
         tot.add_in(stage, &stats);
         if !stats.converged {
@@ -96,7 +101,7 @@ pub fn run_static(
                 stats.failure = Some(crate::solve::nonlinear::Failure::StickSlipCycling);
             }
             model.after_failed_attempt();
-            pc.invalidate();
+            solver.pc.invalidate();
             failed = true;
             let reason = stats.reason.clone();
             let kind = stats.failure;

@@ -25,12 +25,12 @@
 //!   residual evaluation's reduction and one for its slope.
 //! * **Line search**: always (whatever `opts.line_search` says), except on the first
 //!   iteration that imposes a prescribed increment. A length is accepted when ‖r_free‖
-//!   decreases sufficiently (Armijo, the test of `common::line_search`) or when the
+//!   decreases sufficiently (Armijo, the test of `SolverContext::line_search`) or when the
 //!   energy slope along d has dropped, |dᵀ r(u + λ d)| ≤ ½ |dᵀ r(u)| (Matthies & Strang's
 //!   line search, also that of ADINA and LS-DYNA); overshoot is corrected by regula
 //!   falsi on the slope. The energy test matters: on the cantilever the Newton step
 //!   itself raises ‖r‖ at the start of every step, and the pure Armijo search on ‖r‖
-//!   (`common::line_search`) then creeps on with λ = 1/64 and does not converge.
+//!   (`SolverContext::line_search`) then creeps on with λ = 1/64 and does not converge.
 //! * **Reform policy**: reassemble K at the current u, refactor and clear the pairs
 //!   (i) after `opts.bfgs_reform` search directions since the last reform (0 counts as
 //!   1: a reform every iteration, i.e. Newton with a line search), and (ii) when the line
@@ -42,14 +42,13 @@
 //!   taken, as Newton without a line search does.
 //!
 //! Convergence, failure reasons and statistics are those of the other solvers
-//! (`common::evaluate`, `common::Monitor`); `iterations` counts search directions.
+//! ([`super::context::SolverContext`], `common::Monitor`); `iterations` counts search
+//! directions.
 
-use super::common::{evaluate, precond_solve, Constraints, Eval, Monitor, Verdict};
-use super::Preconditioning;
-use super::{Failure, NonlinearOptions, NonlinearProblem, SolveStats};
-use crate::linalg::matrix::DistMatrix;
+use super::common::{Eval, Monitor};
+use super::context::{Next, NonlinearSolver, SolverContext};
 use crate::parallel::Comm;
-use crate::{ErrorKind, Result};
+use crate::Result;
 use std::time::Instant;
 
 /// A pair (s, y) is kept only if sᵀy > CURVATURE_EPS · ‖s‖ ‖y‖.
@@ -183,38 +182,32 @@ impl Pairs {
 
 /// The line search along a descent direction `d` (d_c = 0) from `u` with residual
 /// evaluation `ev0` and slope g0 = dᵀ r(u) < 0: trial lengths from λ = 1, accepted when
-/// ‖r_free‖ decreases sufficiently (Armijo, as `common::line_search`) or when the
-/// energy slope G(λ) = dᵀ r(u + λ d) satisfies |G(λ)| ≤ STOL |g0| (Matthies & Strang
+/// ‖r_free‖ decreases sufficiently (Armijo, as [`SolverContext::line_search`]) or when
+/// the energy slope G(λ) = dᵀ r(u + λ d) satisfies |G(λ)| ≤ STOL |g0| (Matthies & Strang
 /// 1979). A positive slope (overshoot past the minimum of the energy along d) gives the
 /// next λ by regula falsi on G; a negative one means that the energy still decreases
 /// past λ, which is accepted; an element that cannot be evaluated halves λ. On an
 /// accepted return (`true`) `u`, `r` hold that point; otherwise (`false`, the last
 /// evaluated trial, or `Ok(None)`: none could be evaluated) they hold no useful point.
-#[allow(clippy::too_many_arguments)]
 fn search(
-    comm: &dyn Comm,
-    problem: &mut dyn NonlinearProblem,
-    u: &mut [f64],
-    r: &mut [f64],
+    cx: &mut SolverContext,
     d: &[f64],
     ev0: &Eval,
     g0: f64,
-    cons: &Constraints,
-    st: &mut SolveStats,
 ) -> Result<Option<(Eval, f64, bool)>> {
-    let base = u.to_vec();
+    let base = cx.u.to_vec();
     let (lo, glo) = (0.0, g0);
     let mut lambda = 1.0;
     let mut last = None;
     for trial in 0..=MAX_TRIALS {
-        for i in 0..u.len() {
-            u[i] = base[i] + lambda * d[i];
+        for i in 0..cx.u.len() {
+            cx.u[i] = base[i] + lambda * d[i];
         }
-        let Some(ev) = evaluate(comm, problem, u, r, cons, st)? else {
+        let Some(ev) = cx.evaluate()? else {
             lambda = lo + 0.5 * (lambda - lo);
             continue;
         };
-        let g = comm.dot(d, r);
+        let g = cx.comm.dot(d, cx.r);
         let armijo = ev.rn <= (1.0 - 1e-4 * lambda) * ev0.rn;
         if armijo || g.abs() <= STOL * g0.abs() || g < 0.0 {
             return Ok(Some((ev, lambda, ev.rn.is_finite())));
@@ -235,236 +228,198 @@ fn dot(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).map(|(x, y)| x * y).sum()
 }
 
-/// Solve r(u) = 0 on the free dofs with u_c = g on `prescribed` (owned local dof, value)
-/// by BFGS (module doc). `u` holds the start point and receives the solution; `r` the
-/// final residual. Non-convergence is `Ok` with `converged = false`; only runtime
-/// failures are `Err`.
-#[allow(clippy::too_many_arguments)]
-pub fn bfgs(
-    comm: &dyn Comm,
-    problem: &mut dyn NonlinearProblem,
-    u: &mut [f64],
-    r: &mut [f64],
-    prescribed: &[(usize, f64)],
-    k: &mut DistMatrix,
-    pc: &mut Preconditioning,
-    opts: &NonlinearOptions,
-) -> Result<SolveStats> {
-    // The factorization lives from one reform to the next: no refactor on the lag count.
-    let lag = pc.lag;
-    pc.lag = usize::MAX;
-    let out = run(comm, problem, u, r, prescribed, k, pc, opts);
-    pc.lag = lag;
-    pc.invalidate();
-    out
+/// BFGS (module doc): the pairs, the reform state and the work vectors of one solve.
+/// `iterations` counts search directions.
+pub struct Bfgs {
+    reform_every: usize,
+    gap: Vec<f64>,
+    kd: Vec<f64>,
+    rhs: Vec<f64>,
+    d: Vec<f64>,
+    pairs: Pairs,
+    /// s_iᵀ r at the current point for the stored pairs (first loop).
+    a: Vec<f64>,
+    /// r on the free dofs at the current accepted point (set at the first iteration).
+    rf: Vec<f64>,
+    /// K not yet assembled for this step.
+    need_reform: bool,
+    /// Directions computed since the last reform.
+    since_reform: usize,
+    /// K was assembled at the current point and there are no pairs: d is Newton's.
+    k_at_current: bool,
+    /// The preconditioner's lag outside the solve.
+    lag: usize,
 }
 
-/// Reassemble K at `u`, compute the prescribed-increment coupling K (g − u_c) into `kd`
-/// when there is a gap, constrain and factor. `Ok(false)`: failed (reason set).
-#[allow(clippy::too_many_arguments)]
-fn reform(
-    comm: &dyn Comm,
-    problem: &mut dyn NonlinearProblem,
-    u: &[f64],
-    ev: &Eval,
-    cons: &Constraints,
-    k: &mut DistMatrix,
-    pc: &mut Preconditioning,
-    gap: &mut [f64],
-    kd: &mut [f64],
-    st: &mut SolveStats,
-) -> Result<bool> {
-    let t1 = Instant::now();
-    match problem.jacobian(comm, u, k) {
-        Ok(()) => {}
-        Err(e) if e.kind == ErrorKind::Convergence => {
-            st.fail(Failure::Element, e.message);
-            st.seconds_assembly += t1.elapsed().as_secs_f64();
+impl Bfgs {
+    /// For `n` owned dofs, reforming every `reform` directions (0 counts as 1).
+    pub fn new(n: usize, reform: usize) -> Self {
+        Self {
+            reform_every: reform.max(1),
+            gap: vec![0.0; n],
+            kd: vec![0.0; n],
+            rhs: vec![0.0; n],
+            d: vec![0.0; n],
+            pairs: Pairs::default(),
+            a: Vec::new(),
+            rf: Vec::new(),
+            need_reform: true,
+            since_reform: 0,
+            k_at_current: false,
+            lag: 0,
+        }
+    }
+
+    /// Reassemble K at `u`, compute the prescribed-increment coupling K (g − u_c) into
+    /// `kd` when there is a gap, constrain and factor; clear the pairs. `Ok(false)`:
+    /// failed (reason set).
+    fn reform(&mut self, cx: &mut SolverContext, ev: &Eval) -> Result<bool> {
+        let t1 = Instant::now();
+        if !cx.jacobian()? {
+            cx.stats.seconds_assembly += t1.elapsed().as_secs_f64();
             return Ok(false);
         }
-        Err(e) => return Err(e),
-    }
-    cons.gap_vector(u, gap);
-    if ev.gap > 0.0 {
-        k.spmv(comm, gap, kd);
-    } else {
-        kd.iter_mut().for_each(|x| *x = 0.0);
-    }
-    k.constrain(comm, &cons.dofs);
-    st.seconds_assembly += t1.elapsed().as_secs_f64();
-    if pc.is_factored() {
-        let t2 = Instant::now();
-        pc.invalidate();
-        let s0 = pc.seconds_setup;
-        let res = pc.update(comm, k);
-        st.seconds_pc_setup += pc.seconds_setup - s0;
-        st.coarse = pc.coarse.or(st.coarse);
-        st.seconds_linear += t2.elapsed().as_secs_f64();
-        match res {
-            Ok(f) => st.factorizations += f as usize,
-            Err(e) => {
-                st.fail(Failure::LinearSolver, e);
-                return Ok(false);
-            }
+        cx.coupling(ev, &mut self.gap, &mut self.kd);
+        cx.constrain();
+        cx.stats.seconds_assembly += t1.elapsed().as_secs_f64();
+        if cx.pc.is_factored() && !cx.refactor() {
+            return Ok(false);
         }
+        self.pairs.clear();
+        self.a.clear();
+        self.need_reform = false;
+        self.since_reform = 0;
+        self.k_at_current = true;
+        Ok(true)
     }
-    Ok(true)
-}
 
-#[allow(clippy::too_many_arguments)]
-fn run(
-    comm: &dyn Comm,
-    problem: &mut dyn NonlinearProblem,
-    u: &mut [f64],
-    r: &mut [f64],
-    prescribed: &[(usize, f64)],
-    k: &mut DistMatrix,
-    pc: &mut Preconditioning,
-    opts: &NonlinearOptions,
-) -> Result<SolveStats> {
-    let n = u.len();
-    let mut st = SolveStats::default();
-    let cons = Constraints::new(n, prescribed);
-    let reform_every = opts.bfgs_reform.max(1);
-    let mut gap = vec![0.0; n];
-    let mut kd = vec![0.0; n];
-    let mut rhs = vec![0.0; n];
-    let mut d = vec![0.0; n];
-    let mut pairs = Pairs::default();
-    // s_iᵀ r at the current point for the stored pairs (first loop).
-    let mut a: Vec<f64> = Vec::new();
-    let Some(mut ev) = evaluate(comm, problem, u, r, &cons, &mut st)? else {
-        return Ok(st);
-    };
-    let scale = ev.rn.max(ev.f_ref);
-    // r on the free dofs at the current accepted point.
-    let mut rf = r.to_vec();
-    cons.zero_constrained(&mut rf);
-    let mut monitor = Monitor::default();
-    // K not yet assembled for this step.
-    let mut need_reform = true;
-    // Directions computed since the last reform.
-    let mut since_reform = 0usize;
-    // K was assembled at the current point and there are no pairs: d is Newton's.
-    let mut k_at_current = false;
-    st.residual_history.push(ev.relative());
-    loop {
-        match monitor.verdict(&ev, st.iterations, scale, opts) {
-            Verdict::Converged => {
-                st.converged = true;
-                return Ok(st);
-            }
-            Verdict::Fail(kind, why) => {
-                st.fail(kind, why);
-                return Ok(st);
-            }
-            Verdict::Continue => {}
-        }
-        if need_reform || since_reform >= reform_every || (ev.gap > 0.0 && !k_at_current) {
-            if !reform(
-                comm, problem, u, &ev, &cons, k, pc, &mut gap, &mut kd, &mut st,
-            )? {
-                return Ok(st);
-            }
-            pairs.clear();
-            a.clear();
-            need_reform = false;
-            since_reform = 0;
-            k_at_current = true;
-        }
-        let kref: &DistMatrix = k;
-        let mut op = kref;
-
-        if ev.gap > 0.0 {
-            // Newton's first iteration: K₀ Δu = −r − K_fc (g − u_c), Δu_c = g − u_c,
-            // full step (the coupling `kd` was computed by the reform at this point).
-            for i in 0..n {
-                rhs[i] = if cons.is_c[i] { gap[i] } else { -r[i] - kd[i] };
-            }
-            d.copy_from_slice(&gap);
-            if precond_solve(comm, &mut op, kref, pc, &rhs, &mut d, &opts.linear, &mut st)?
-                .is_none()
-            {
-                return Ok(st);
-            }
-            st.iterations += 1;
-            since_reform += 1;
-            for i in 0..n {
-                u[i] += d[i];
-            }
-            for &(dof, g) in prescribed {
-                u[dof] = g;
-            }
-            ev = match evaluate(comm, problem, u, r, &cons, &mut st)? {
-                Some(e) => e,
-                None => return Ok(st),
+    /// Newton's first iteration: K₀ Δu = −r − K_fc (g − u_c), Δu_c = g − u_c, full step
+    /// (the coupling `kd` was computed by the reform at this point).
+    fn impose(&mut self, cx: &mut SolverContext) -> Result<Next> {
+        for i in 0..cx.n() {
+            self.rhs[i] = if cx.cons.is_c[i] {
+                self.gap[i]
+            } else {
+                -cx.r[i] - self.kd[i]
             };
-            st.residual_history.push(ev.relative());
-            monitor.record(Monitor::measure(comm, &d, &rf, &cons.is_c), 1.0);
-            rf.copy_from_slice(r);
-            cons.zero_constrained(&mut rf);
-            k_at_current = false;
-            continue;
         }
+        self.d.copy_from_slice(&self.gap);
+        if cx.linear_solve(&self.rhs, &mut self.d)?.is_none() {
+            return Ok(Next::Stop);
+        }
+        cx.stats.iterations += 1;
+        self.since_reform += 1;
+        for i in 0..cx.n() {
+            cx.u[i] += self.d[i];
+        }
+        for &(dof, g) in cx.cons.prescribed {
+            cx.u[dof] = g;
+        }
+        let Some(ev) = cx.evaluate()? else {
+            return Ok(Next::Stop);
+        };
+        let measured = Monitor::measure(cx.comm, &self.d, &self.rf, &cx.cons.is_c);
+        cx.monitor.record(measured, 1.0);
+        self.rf.copy_from_slice(cx.r);
+        cx.cons.zero_constrained(&mut self.rf);
+        self.k_at_current = false;
+        Ok(Next::Moved(ev))
+    }
 
-        // d = −H r_f by the two-loop recursion with H₀ = K₀⁻¹.
-        let alpha = pairs.first_loop(&a, &rf, &mut rhs);
-        d.iter_mut().for_each(|x| *x = 0.0);
-        if precond_solve(comm, &mut op, kref, pc, &rhs, &mut d, &opts.linear, &mut st)?.is_none() {
-            return Ok(st);
+    /// A quasi-Newton iteration: d = −H r_f by the two-loop recursion with H₀ = K₀⁻¹, the
+    /// line search along it, the new pair. A failure along a quasi-Newton direction
+    /// discards the iteration and reforms.
+    fn quasi_newton(&mut self, cx: &mut SolverContext, ev: &Eval) -> Result<Next> {
+        let alpha = self.pairs.first_loop(&self.a, &self.rf, &mut self.rhs);
+        self.d.iter_mut().for_each(|x| *x = 0.0);
+        if cx.linear_solve(&self.rhs, &mut self.d)?.is_none() {
+            return Ok(Next::Stop);
         }
-        cons.zero_constrained(&mut d);
+        cx.cons.zero_constrained(&mut self.d);
         // H r and g0 = dᵀ r (d = −H r), the second loop's reduction carrying both.
-        let g0 = -pairs.second_loop(comm, &alpha, &a, &rf, &mut d);
-        d.iter_mut().for_each(|x| *x = -*x);
-        st.iterations += 1;
-        since_reform += 1;
+        let g0 = -self
+            .pairs
+            .second_loop(cx.comm, &alpha, &self.a, &self.rf, &mut self.d);
+        self.d.iter_mut().for_each(|x| *x = -*x);
+        cx.stats.iterations += 1;
+        self.since_reform += 1;
 
-        // Line search along d; a failure along a quasi-Newton direction reforms.
-        let u_base = u.to_vec();
-        let r_base = r.to_vec();
+        let u_base = cx.u.to_vec();
+        let r_base = cx.r.to_vec();
         let ls = if g0 < 0.0 {
-            search(comm, problem, u, r, &d, &ev, g0, &cons, &mut st)?
+            search(cx, &self.d, ev, g0)?
         } else {
             // Not a descent direction: H (or K₀) is not positive definite here.
             None
         };
         let accepted = match ls {
             Some((e, lambda, true)) => Some((e, lambda)),
-            _ if k_at_current => {
+            _ if self.k_at_current => {
                 // Newton's direction with no acceptable length: the full step, as
                 // Newton takes it.
-                for i in 0..n {
-                    u[i] = u_base[i] + d[i];
+                for ((x, b), di) in cx.u.iter_mut().zip(&u_base).zip(&self.d) {
+                    *x = b + di;
                 }
-                match evaluate(comm, problem, u, r, &cons, &mut st)? {
+                match cx.evaluate()? {
                     Some(e) => Some((e, 1.0)),
-                    None => return Ok(st),
+                    None => return Ok(Next::Stop),
                 }
             }
             _ => None,
         };
-        let Some((e, lambda)) = accepted else {
-            u.copy_from_slice(&u_base);
-            r.copy_from_slice(&r_base);
-            need_reform = true;
-            continue;
+        let Some((ev, lambda)) = accepted else {
+            cx.u.copy_from_slice(&u_base);
+            cx.r.copy_from_slice(&r_base);
+            self.need_reform = true;
+            return Ok(Next::Again);
         };
-        ev = e;
-        st.residual_history.push(ev.relative());
-        let s: Vec<f64> = d.iter().map(|x| lambda * x).collect();
-        let mut y = r.to_vec();
-        cons.zero_constrained(&mut y);
-        for i in 0..n {
-            std::mem::swap(&mut rf[i], &mut y[i]);
-            y[i] = rf[i] - y[i];
+        let s: Vec<f64> = self.d.iter().map(|x| lambda * x).collect();
+        let mut y = cx.r.to_vec();
+        cx.cons.zero_constrained(&mut y);
+        for (rfi, yi) in self.rf.iter_mut().zip(y.iter_mut()) {
+            std::mem::swap(rfi, yi);
+            *yi = *rfi - *yi;
         }
         // The pair, ‖s‖ and the first loop's s_iᵀ r in one reduction.
-        let (sn, _, a_new) = pairs.offer(comm, s, y, &rf);
-        a = a_new;
+        let (sn, _, a_new) = self.pairs.offer(cx.comm, s, y, &self.rf);
+        self.a = a_new;
         // ‖s‖ = λ‖d‖ and the energy λ|dᵀr| of the correction taken.
-        monitor.record((sn / lambda, g0.abs()), lambda);
-        k_at_current = false;
+        cx.monitor.record((sn / lambda, g0.abs()), lambda);
+        self.k_at_current = false;
+        Ok(Next::Moved(ev))
+    }
+}
+
+impl NonlinearSolver for Bfgs {
+    /// The factorization lives from one reform to the next: no refactor on the lag count.
+    fn setup(&mut self, cx: &mut SolverContext) -> Result<bool> {
+        self.lag = cx.pc.lag;
+        cx.pc.lag = usize::MAX;
+        Ok(true)
+    }
+
+    fn iterate(&mut self, cx: &mut SolverContext, ev: &Eval) -> Result<Next> {
+        if self.rf.len() != cx.n() {
+            // r on the free dofs at the start point.
+            self.rf = cx.r.to_vec();
+            cx.cons.zero_constrained(&mut self.rf);
+        }
+        let reform = self.need_reform
+            || self.since_reform >= self.reform_every
+            || (ev.gap > 0.0 && !self.k_at_current);
+        if reform && !self.reform(cx, ev)? {
+            return Ok(Next::Stop);
+        }
+        if ev.gap > 0.0 {
+            self.impose(cx)
+        } else {
+            self.quasi_newton(cx, ev)
+        }
+    }
+
+    fn finish(&mut self, cx: &mut SolverContext) {
+        cx.pc.lag = self.lag;
+        cx.pc.invalidate();
     }
 }
 

@@ -1,14 +1,9 @@
-//! What the nonlinear solvers share: the constraint algebra, the convergence test, the
-//! preconditioned linear solve with a (lagged) factored preconditioner, and the
-//! backtracking line search on ‖r_free‖.
+//! What the nonlinear solvers test with: the constraint algebra, a residual evaluation's
+//! norms and the convergence test ([`Monitor`]). The loop, the linear solve and the line
+//! search that use them are the solver context's (`context.rs`).
 
-use super::Preconditioning;
-use super::{Failure, NonlinearOptions, NonlinearProblem, SolveStats};
-use crate::linalg::gmres::{gmres, GmresOptions, GmresStats};
-use crate::linalg::LinearOperator;
+use super::{Failure, NonlinearOptions};
 use crate::parallel::Comm;
-use crate::{ErrorKind, Result};
-use std::time::Instant;
 
 /// A step that makes the residual this many times larger than the step's force scale
 /// has diverged.
@@ -68,47 +63,6 @@ impl Eval {
             self.rn
         }
     }
-}
-
-/// Evaluate r(u). `Ok(None)` means the residual could not be evaluated (an inverted
-/// element): a failed iteration, with the reason left in `st.reason`.
-pub fn evaluate(
-    comm: &dyn Comm,
-    problem: &mut dyn NonlinearProblem,
-    u: &[f64],
-    r: &mut [f64],
-    cons: &Constraints,
-    st: &mut SolveStats,
-) -> Result<Option<Eval>> {
-    let t0 = Instant::now();
-    let f_ref = match problem.residual(comm, u, r) {
-        Ok(f) => f,
-        Err(e) if e.kind == ErrorKind::Convergence => {
-            st.fail(Failure::Element, e.message);
-            st.seconds_assembly += t0.elapsed().as_secs_f64();
-            return Ok(None);
-        }
-        Err(e) => return Err(e),
-    };
-    st.seconds_assembly += t0.elapsed().as_secs_f64();
-    st.residual_evaluations += 1;
-    let mut sums = [0.0, 0.0, 0.0];
-    for i in 0..u.len() {
-        if !cons.is_c[i] {
-            sums[0] += r[i] * r[i];
-        }
-        sums[2] += u[i] * u[i];
-    }
-    for &(d, g) in cons.prescribed {
-        sums[1] += (g - u[d]).powi(2);
-    }
-    comm.allreduce_sum(&mut sums);
-    Ok(Some(Eval {
-        rn: sums[0].sqrt(),
-        f_ref,
-        gap: sums[1].sqrt(),
-        un: sums[2].sqrt(),
-    }))
 }
 
 /// What to do after an evaluation.
@@ -250,166 +204,10 @@ impl Monitor {
     }
 }
 
-/// A linear solve that missed its tolerance but reached this relative residual is
-/// still used as the Newton correction.
-pub const ACCEPTABLE_LINEAR_RESIDUAL: f64 = 1e-6;
-
-/// Solve `a x = b` by GMRES preconditioned by `pc` set up on the matrix `pc_of` (or kept
-/// from an earlier one, as its policy says); a kept factorization under which GMRES
-/// fails is refreshed once. `x` holds the initial guess. `Ok(None)`: failed (reason set).
-#[allow(clippy::too_many_arguments)]
-pub fn precond_solve(
-    comm: &dyn Comm,
-    a: &mut dyn LinearOperator,
-    pc_of: &crate::linalg::matrix::DistMatrix,
-    pc: &mut Preconditioning,
-    b: &[f64],
-    x: &mut [f64],
-    lin: &GmresOptions,
-    st: &mut SolveStats,
-) -> Result<Option<GmresStats>> {
-    let t = Instant::now();
-    let x0 = x.to_vec();
-    let factored = pc.is_factored();
-    let mut fresh = false;
-    let out = loop {
-        if factored {
-            let s0 = pc.seconds_setup;
-            let res = pc.update(comm, pc_of);
-            st.seconds_pc_setup += pc.seconds_setup - s0;
-            st.coarse = pc.coarse.or(st.coarse);
-            match res {
-                Ok(f) => {
-                    fresh |= f;
-                    st.factorizations += f as usize;
-                }
-                Err(e) => {
-                    st.fail(Failure::LinearSolver, e);
-                    break None;
-                }
-            }
-        }
-        let gs = gmres(comm, a, pc.get(), b, x, lin)?;
-        st.linear_iterations += gs.iterations;
-        if gs.converged {
-            break Some(gs);
-        }
-        // Inexact Newton (Eisenstat–Walker) only needs ‖r_lin‖ ≤ η ‖b‖ with η < 1: a
-        // solve that stalls at the attainable accuracy of an ill-conditioned system
-        // (nearly incompressible: K/μ ~ 1e4) is still an excellent correction.
-        if gs.residual_norm <= ACCEPTABLE_LINEAR_RESIDUAL * gs.rhs_norm {
-            break Some(gs);
-        }
-        if fresh || !factored {
-            st.fail(
-                Failure::LinearSolver,
-                format!(
-                    "GMRES did not converge in {} iterations (relative residual {:.3e})",
-                    gs.iterations,
-                    gs.residual_norm / gs.rhs_norm.max(f64::MIN_POSITIVE)
-                ),
-            );
-            break None;
-        }
-        pc.invalidate();
-        x.copy_from_slice(&x0);
-    };
-    st.seconds_linear += t.elapsed().as_secs_f64();
-    Ok(out)
-}
-
-/// Backtracking line search on ‖r_free‖ along `du` from `u` (whose residual norm is
-/// `rn0`): step lengths 1, ½, ¼, ... until ‖r(u + λ du)‖ ≤ (1 − 10⁻⁴ λ) ‖r(u)‖ (Armijo,
-/// Dennis & Schnabel §6.3), at most `max_halvings` times. On return `u` holds the
-/// accepted point, `r` its residual, and the result its evaluation and λ; if no
-/// length is accepted the smallest is taken (the convergence test then decides).
-#[allow(clippy::too_many_arguments)]
-pub fn line_search(
-    comm: &dyn Comm,
-    problem: &mut dyn NonlinearProblem,
-    u: &mut [f64],
-    r: &mut [f64],
-    du: &[f64],
-    rn0: f64,
-    cons: &Constraints,
-    max_halvings: usize,
-    st: &mut SolveStats,
-) -> Result<Option<(Eval, f64)>> {
-    let base = u.to_vec();
-    let mut lambda = 1.0;
-    for k in 0..=max_halvings {
-        for i in 0..u.len() {
-            u[i] = base[i] + lambda * du[i];
-        }
-        let ev = evaluate(comm, problem, u, r, cons, st)?;
-        if let Some(ev) = ev {
-            if ev.rn <= (1.0 - 1e-4 * lambda) * rn0 || k == max_halvings {
-                return Ok(Some((ev, lambda)));
-            }
-        } else if k == max_halvings {
-            return Ok(None);
-        }
-        lambda *= 0.5;
-    }
-    unreachable!()
-}
-
-/// Take the correction `du` from `u` (residual `r`, evaluation `ev`): the backtracking line
-/// search if asked for, else the full step, halved while it cannot be evaluated (an
-/// inverted element; prescribed values always land in full), then record it in
-/// `monitor`. On return `u` and `r`
-/// hold the new point; `Ok(None)`: it could not be evaluated (reason in `st`).
-#[allow(clippy::too_many_arguments)]
-pub fn take_step(
-    comm: &dyn Comm,
-    problem: &mut dyn NonlinearProblem,
-    u: &mut [f64],
-    r: &mut [f64],
-    du: &[f64],
-    ev: &Eval,
-    cons: &Constraints,
-    line_search_on: bool,
-    monitor: &mut Monitor,
-    st: &mut SolveStats,
-) -> Result<Option<Eval>> {
-    let measured = Monitor::measure(comm, du, r, &cons.is_c);
-    let (next, lambda) = if line_search_on && ev.gap == 0.0 {
-        match line_search(comm, problem, u, r, du, ev.rn, cons, 6, st)? {
-            Some(x) => x,
-            None => return Ok(None),
-        }
-    } else {
-        let base = u.to_vec();
-        let mut lambda = 1.0;
-        loop {
-            // On the iteration that imposes a prescribed increment (a moving wall's
-            // reference point, a displacement boundary condition) the prescribed values
-            // land in full; only the free unknowns' part of the step is shortened.
-            for (i, ((x, b), d)) in u.iter_mut().zip(&base).zip(du).enumerate() {
-                let s = if ev.gap > 0.0 && cons.is_c[i] {
-                    1.0
-                } else {
-                    lambda
-                };
-                *x = b + s * d;
-            }
-            match evaluate(comm, problem, u, r, cons, st)? {
-                Some(e) => break (e, lambda),
-                // A full step that inverts an element (a nearly incompressible body
-                // overshooting, a thin wall folding) is shortened, not fatal: halve it
-                // up to 5 times.
-                None if lambda > 0.05 => lambda *= 0.5,
-                None => return Ok(None),
-            }
-        }
-    };
-    monitor.record(measured, lambda);
-    Ok(Some(next))
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::linalg::gmres::GmresOptions;
     use crate::solve::nonlinear::{FdRule, SolverKind};
 
     fn opts() -> NonlinearOptions {

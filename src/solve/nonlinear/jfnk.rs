@@ -15,9 +15,9 @@
 //! * Prescribed dofs as in Newton: Δu_c = g − u_c exactly; the coupling K_fc (g − u_c) on
 //!   the right-hand side is itself one finite-difference product.
 
-use super::common::{evaluate, take_step, Constraints, Eval, Monitor, Verdict};
-use super::Preconditioning;
-use super::{Failure, FdRule, NonlinearOptions, NonlinearProblem, SolveStats};
+use super::common::Eval;
+use super::context::{Next, NonlinearSolver, SolverContext};
+use super::{Failure, FdRule, NonlinearOptions, NonlinearProblem};
 use crate::linalg::gmres::{gmres, GmresOptions};
 use crate::linalg::matrix::DistMatrix;
 use crate::linalg::LinearOperator;
@@ -42,50 +42,38 @@ const ETA_IMPOSE: f64 = 1e-4;
 /// 15 → 156 / 1395 / 4.2 s with a retry (`scripts/solver-table`, issue 11).
 const REFRESH_AFTER_GMRES: usize = 15;
 
-/// The finite-difference Jacobian of `problem` at `u` (whose residual is `r0`), acting
-/// on the free dofs; constrained rows are the identity.
-pub struct FdJacobian<'a> {
-    pub problem: &'a mut dyn NonlinearProblem,
-    pub u: &'a [f64],
-    pub r0: &'a [f64],
-    pub is_c: &'a [bool],
+/// How the finite-difference step ε of a product is chosen ([`FdRule`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FdStep {
     pub rule: FdRule,
+    /// Relative perturbation δ ([`FdRule::Element`]).
     pub delta: f64,
+    /// A characteristic element length h ([`FdRule::Element`]).
     pub h: f64,
-    /// ‖u‖ (for Walker–Pernice).
+    /// ‖u‖ ([`FdRule::WalkerPernice`]).
     pub u_norm: f64,
-    pub products: usize,
-    pub seconds: f64,
-    w: Vec<f64>,
-    r1: Vec<f64>,
 }
 
-impl<'a> FdJacobian<'a> {
-    #[allow(clippy::too_many_arguments)]
-    pub fn new(
-        problem: &'a mut dyn NonlinearProblem,
-        u: &'a [f64],
-        r0: &'a [f64],
-        is_c: &'a [bool],
-        rule: FdRule,
-        delta: f64,
-        h: f64,
-        u_norm: f64,
-    ) -> Self {
-        let n = u.len();
+impl Default for FdStep {
+    /// The deck's defaults: δ = 10⁻⁴ of a unit element.
+    fn default() -> Self {
         Self {
-            problem,
-            u,
-            r0,
-            is_c,
-            rule,
-            delta,
-            h,
+            rule: FdRule::Element,
+            delta: 1e-4,
+            h: 1.0,
+            u_norm: 0.0,
+        }
+    }
+}
+
+impl FdStep {
+    /// The step of a solve's options at a point of norm `u_norm`.
+    pub fn of(opts: &NonlinearOptions, u_norm: f64) -> Self {
+        Self {
+            rule: opts.fd_rule,
+            delta: opts.fd_delta,
+            h: opts.char_length,
             u_norm,
-            products: 0,
-            seconds: 0.0,
-            w: vec![0.0; n],
-            r1: vec![0.0; n],
         }
     }
 
@@ -95,6 +83,48 @@ impl<'a> FdJacobian<'a> {
             FdRule::Element => self.delta * self.h / vn,
             FdRule::WalkerPernice => ((1.0 + self.u_norm) * f64::EPSILON).sqrt() / vn,
         }
+    }
+}
+
+/// The finite-difference Jacobian of `problem` at `u` (whose residual is `r0`), acting
+/// on the free dofs; constrained rows are the identity.
+pub struct FdJacobian<'a> {
+    pub problem: &'a mut dyn NonlinearProblem,
+    pub u: &'a [f64],
+    pub r0: &'a [f64],
+    pub is_c: &'a [bool],
+    pub step: FdStep,
+    pub products: usize,
+    pub seconds: f64,
+    w: Vec<f64>,
+    r1: Vec<f64>,
+}
+
+impl<'a> FdJacobian<'a> {
+    pub fn new(
+        problem: &'a mut dyn NonlinearProblem,
+        u: &'a [f64],
+        r0: &'a [f64],
+        is_c: &'a [bool],
+        step: FdStep,
+    ) -> Self {
+        let n = u.len();
+        Self {
+            problem,
+            u,
+            r0,
+            is_c,
+            step,
+            products: 0,
+            seconds: 0.0,
+            w: vec![0.0; n],
+            r1: vec![0.0; n],
+        }
+    }
+
+    /// The step ε for a direction of norm `vn`.
+    pub fn epsilon(&self, vn: f64) -> f64 {
+        self.step.epsilon(vn)
     }
 }
 
@@ -130,232 +160,165 @@ impl LinearOperator for FdJacobian<'_> {
 }
 
 /// Assemble and factor the preconditioning stiffness at `u` (collective).
-#[allow(clippy::too_many_arguments)]
-fn refresh_preconditioner(
-    comm: &dyn Comm,
-    problem: &mut dyn NonlinearProblem,
-    u: &[f64],
-    k: &mut DistMatrix,
-    pc: &mut Preconditioning,
-    cons: &Constraints,
-    st: &mut SolveStats,
-) -> Result<bool> {
+/// `Ok(false)`: failed (reason set).
+fn refresh_preconditioner(cx: &mut SolverContext) -> Result<bool> {
     let t = Instant::now();
-    match problem.jacobian(comm, u, k) {
-        Ok(()) => {}
-        Err(e) if e.kind == ErrorKind::Convergence => {
-            st.fail(Failure::Element, e.message);
-            return Ok(false);
-        }
-        Err(e) => return Err(e),
+    if !cx.jacobian()? {
+        return Ok(false);
     }
-    k.constrain(comm, &cons.dofs);
-    st.seconds_assembly += t.elapsed().as_secs_f64();
-    let t = Instant::now();
-    pc.invalidate();
-    let s0 = pc.seconds_setup;
-    let res = pc.update(comm, k);
-    st.seconds_pc_setup += pc.seconds_setup - s0;
-    st.coarse = pc.coarse.or(st.coarse);
-    let ok = match res {
-        Ok(f) => {
-            st.factorizations += f as usize;
-            true
-        }
-        Err(e) => {
-            st.fail(Failure::LinearSolver, e);
-            false
-        }
-    };
-    st.seconds_linear += t.elapsed().as_secs_f64();
-    Ok(ok)
+    cx.constrain();
+    cx.stats.seconds_assembly += t.elapsed().as_secs_f64();
+    Ok(cx.refactor())
 }
 
-/// Solve one load step by JFNK; same contract as [`super::newton::newton`].
-#[allow(clippy::too_many_arguments)]
-pub fn jfnk(
-    comm: &dyn Comm,
-    problem: &mut dyn NonlinearProblem,
-    u: &mut [f64],
-    r: &mut [f64],
-    prescribed: &[(usize, f64)],
-    k: &mut DistMatrix,
-    pc: &mut Preconditioning,
-    opts: &NonlinearOptions,
-) -> Result<SolveStats> {
-    let n = u.len();
-    let mut st = SolveStats::default();
-    let cons = Constraints::new(n, prescribed);
-    let factored = pc.is_factored();
-    if factored && !refresh_preconditioner(comm, problem, u, k, pc, &cons, &mut st)? {
-        return Ok(st);
+/// JFNK (module doc): the forcing-term and preconditioner-refresh state of one solve.
+pub struct Jfnk {
+    du: Vec<f64>,
+    gapv: Vec<f64>,
+    /// The preconditioner is a factored one (set up on an assembled stiffness).
+    factored: bool,
+    eta: f64,
+    prev_rn: f64,
+    /// The preconditioning stiffness was (re)assembled at the current iterate.
+    fresh_here: bool,
+    /// GMRES struggled under the lagged preconditioner.
+    refresh_next: bool,
+}
+
+impl Jfnk {
+    /// For `n` owned dofs.
+    pub fn new(n: usize) -> Self {
+        Self {
+            du: vec![0.0; n],
+            gapv: vec![0.0; n],
+            factored: false,
+            eta: ETA_0,
+            prev_rn: f64::NAN,
+            fresh_here: false,
+            refresh_next: false,
+        }
     }
-    let mut du = vec![0.0; n];
-    let mut gapv = vec![0.0; n];
-    let Some(mut ev) = evaluate(comm, problem, u, r, &cons, &mut st)? else {
-        return Ok(st);
-    };
-    let scale = ev.rn.max(ev.f_ref);
-    let mut monitor = Monitor::default();
-    let (eta_max, gamma, alpha) = (ETA_MAX, 0.9, 2.0);
-    let mut eta = ETA_0;
-    let mut prev_rn = f64::NAN;
-    // The preconditioning stiffness was (re)assembled at the current iterate.
-    let mut fresh_here = factored;
-    // GMRES struggled under the lagged preconditioner.
-    let mut refresh_next = false;
-    for it in 0.. {
-        st.residual_history.push(ev.relative());
-        match monitor.verdict(&ev, it, scale, opts) {
-            Verdict::Converged => {
-                st.converged = true;
-                return Ok(st);
-            }
-            Verdict::Fail(kind, why) => {
-                st.fail(kind, why);
-                return Ok(st);
-            }
-            Verdict::Continue => {}
-        }
-        if refresh_next {
-            // Refresh it here, and take this direction on the Jacobian just assembled,
-            // as at the start of the step.
-            if !refresh_preconditioner(comm, problem, u, k, pc, &cons, &mut st)? {
-                return Ok(st);
-            }
-            fresh_here = true;
-        }
-        // Eisenstat–Walker choice 2 with safeguard (Eisenstat & Walker 1996, §2).
-        if it > 0 && prev_rn > 0.0 && ev.gap == 0.0 {
-            let mut e = gamma * (ev.rn / prev_rn).powf(alpha);
-            let guard = gamma * eta.powf(alpha);
+
+    /// The forcing term of this iteration: Eisenstat–Walker choice 2 with safeguard
+    /// (Eisenstat & Walker 1996, §2), never much below what the residual tolerance asks
+    /// for; nearly exact on the iteration that imposes a prescribed increment.
+    fn forcing_term(&mut self, ev: &Eval, it: usize, opts: &NonlinearOptions) -> f64 {
+        let (eta_max, gamma, alpha) = (ETA_MAX, 0.9, 2.0);
+        if it > 0 && self.prev_rn > 0.0 && ev.gap == 0.0 {
+            let mut e = gamma * (ev.rn / self.prev_rn).powf(alpha);
+            let guard = gamma * self.eta.powf(alpha);
             if guard > 0.1 {
                 e = e.max(guard);
             }
-            eta = e.min(eta_max);
+            self.eta = e.min(eta_max);
         }
         // No need to solve much below what the residual tolerance asks for.
         let target = 0.5 * opts.residual_rtol * ev.f_ref / ev.rn.max(f64::MIN_POSITIVE);
-        let mut eta_k = eta.max(target).min(eta_max).max(opts.linear.rtol);
+        let mut eta_k = self.eta.max(target).min(eta_max).max(opts.linear.rtol);
         if ev.gap > 0.0 {
             // The iteration that imposes a prescribed increment carries the whole motion
             // of the step: solve it nearly exactly (a loose solve inverts elements).
             eta_k = ETA_IMPOSE.max(opts.linear.rtol);
         }
-        prev_rn = ev.rn;
-        cons.gap_vector(u, &mut gapv);
-        // The first iteration starts where the preconditioning stiffness was just
-        // assembled: it is the exact Jacobian there, so it is the operator too. That
-        // also keeps the Krylov operator linear at a converged plastic state, where a
-        // finite-difference product loads or unloads depending on the direction.
-        let assembled = fresh_here;
-        let Some(gmres_its) = direction(
-            comm, problem, u, r, &cons, &gapv, &ev, eta_k, &mut du, k, pc, opts, assembled, &mut st,
-        )?
-        else {
-            return Ok(st);
-        };
-        fresh_here = false;
-        st.iterations += 1;
-        match take_step(
-            comm,
-            problem,
-            u,
-            r,
-            &du,
-            &ev,
-            &cons,
-            opts.line_search,
-            &mut monitor,
-            &mut st,
-        )? {
-            Some(next) => ev = next,
-            None => return Ok(st),
-        }
-        refresh_next = factored && !assembled && gmres_its > REFRESH_AFTER_GMRES;
+        self.prev_rn = ev.rn;
+        eta_k
     }
-    unreachable!("the loop returns")
-}
 
-/// One JFNK linear solve J Δu = −r_f − J_fc (g − u_c), Δu_c = g − u_c (the coupling is
-/// itself one finite-difference product), by GMRES to the forcing term `eta` with the
-/// lagged preconditioner, refreshed once at the current point if GMRES fails under it.
-/// With `assembled`, GMRES works on `k` itself (the Jacobian just assembled at `u` for
-/// the preconditioner) instead of finite-difference products.
-/// `Ok(Some(its))`: GMRES converged in `its` iterations (its last attempt);
-/// `Ok(None)`: the iteration failed (reason in `st`).
-#[allow(clippy::too_many_arguments)]
-fn direction(
-    comm: &dyn Comm,
-    problem: &mut dyn NonlinearProblem,
-    u: &[f64],
-    r: &[f64],
-    cons: &Constraints,
-    gapv: &[f64],
-    ev: &Eval,
-    eta: f64,
-    du: &mut [f64],
-    k: &mut DistMatrix,
-    pc: &mut Preconditioning,
-    opts: &NonlinearOptions,
-    assembled: bool,
-    st: &mut SolveStats,
-) -> Result<Option<usize>> {
-    let n = u.len();
-    let t = Instant::now();
-    let outside = st.seconds_linear + st.seconds_assembly;
-    let mut op = FdJacobian::new(
-        problem,
-        u,
-        r,
-        &cons.is_c,
-        opts.fd_rule,
-        opts.fd_delta,
-        opts.char_length,
-        ev.un,
-    );
-    let res = (|| -> Result<Option<usize>> {
+    /// One JFNK linear solve J Δu = −r_f − J_fc (g − u_c), Δu_c = g − u_c (the coupling
+    /// is itself one finite-difference product), by GMRES to the forcing term `eta` with
+    /// the lagged preconditioner, refreshed once at the current point if GMRES fails
+    /// under it. With `assembled`, GMRES works on `k` itself (the Jacobian just
+    /// assembled at `u` for the preconditioner) instead of finite-difference products.
+    /// `Ok(Some(its))`: GMRES converged in `its` iterations (its last attempt);
+    /// `Ok(None)`: the iteration failed (reason set).
+    fn direction(
+        &mut self,
+        cx: &mut SolverContext,
+        ev: &Eval,
+        eta: f64,
+        assembled: bool,
+    ) -> Result<Option<usize>> {
+        let t = Instant::now();
+        let outside = cx.stats.seconds_linear + cx.stats.seconds_assembly;
+        let mut products = 0;
+        let res = self.krylov(cx, ev, eta, assembled, &mut products);
+        // Time in GMRES and FD products; a refresh booked its own assembly and
+        // factorization.
+        let refresh = cx.stats.seconds_linear + cx.stats.seconds_assembly - outside;
+        cx.stats.seconds_linear += (t.elapsed().as_secs_f64() - refresh).max(0.0);
+        cx.stats.fd_products += products;
+        cx.stats.residual_evaluations += products;
+        match res {
+            Err(e) if e.kind == ErrorKind::Convergence => {
+                cx.stats.fail(
+                    Failure::Element,
+                    format!("a finite-difference product failed: {}", e.message),
+                );
+                Ok(None)
+            }
+            other => other,
+        }
+    }
+
+    /// The right-hand side and the GMRES attempts of [`Jfnk::direction`]; the
+    /// finite-difference products made are added to `products` (errors included).
+    fn krylov(
+        &mut self,
+        cx: &mut SolverContext,
+        ev: &Eval,
+        eta: f64,
+        assembled: bool,
+        products: &mut usize,
+    ) -> Result<Option<usize>> {
+        let n = cx.n();
+        let step = FdStep::of(cx.opts, ev.un);
         let mut coupling = vec![0.0; n];
         if ev.gap > 0.0 {
-            coupling_product(comm, &mut op, gapv, &mut coupling)?;
+            let mut op = FdJacobian::new(cx.problem, cx.u, cx.r, &cx.cons.is_c, step);
+            let res = coupling_product(cx.comm, &mut op, &self.gapv, &mut coupling);
+            *products += op.products;
+            res?;
         }
         let rhs: Vec<f64> = (0..n)
             .map(|i| {
-                if cons.is_c[i] {
-                    gapv[i]
+                if cx.cons.is_c[i] {
+                    self.gapv[i]
                 } else {
-                    -r[i] - coupling[i]
+                    -cx.r[i] - coupling[i]
                 }
             })
             .collect();
         let lin = GmresOptions {
             rtol: eta,
-            ..opts.linear
+            ..cx.opts.linear
         };
         // A kept factorization gets one refresh; a fresh one (the assembled operator's)
         // none.
         let attempts = if assembled { 1 } else { 2 };
         for attempt in 0..attempts {
-            du.copy_from_slice(gapv);
-            let prec = pc.get();
+            self.du.copy_from_slice(&self.gapv);
+            let prec = cx.pc.get();
             let gs = if assembled {
-                let mut kop: &DistMatrix = k;
-                gmres(comm, &mut kop, prec, &rhs, du, &lin)?
+                let mut kop: &DistMatrix = cx.k;
+                gmres(cx.comm, &mut kop, prec, &rhs, &mut self.du, &lin)?
             } else {
-                gmres(comm, &mut op, prec, &rhs, du, &lin)?
+                let mut op = FdJacobian::new(cx.problem, cx.u, cx.r, &cx.cons.is_c, step);
+                let res = gmres(cx.comm, &mut op, prec, &rhs, &mut self.du, &lin);
+                *products += op.products;
+                res?
             };
-            st.linear_iterations += gs.iterations;
+            cx.stats.linear_iterations += gs.iterations;
             if gs.converged {
                 return Ok(Some(gs.iterations));
             }
-            if attempt == 0 && pc.is_factored() && !assembled {
+            if attempt == 0 && cx.pc.is_factored() && !assembled {
                 // GMRES stalled under the lagged factorization: refresh it at this point.
-                if !refresh_preconditioner(comm, op.problem, u, k, pc, cons, st)? {
+                if !refresh_preconditioner(cx)? {
                     return Ok(None);
                 }
                 continue;
             }
-            st.fail(
+            cx.stats.fail(
                 Failure::LinearSolver,
                 format!(
                     "GMRES did not converge in {} iterations (relative residual {:.3e}, forcing term {eta:.1e})",
@@ -365,21 +328,43 @@ fn direction(
             );
         }
         Ok(None)
-    })();
-    // Time in GMRES and FD products; a refresh booked its own assembly and factorization.
-    let refresh = st.seconds_linear + st.seconds_assembly - outside;
-    st.seconds_linear += (t.elapsed().as_secs_f64() - refresh).max(0.0);
-    st.fd_products += op.products;
-    st.residual_evaluations += op.products;
-    match res {
-        Err(e) if e.kind == ErrorKind::Convergence => {
-            st.fail(
-                Failure::Element,
-                format!("a finite-difference product failed: {}", e.message),
-            );
-            Ok(None)
+    }
+}
+
+impl NonlinearSolver for Jfnk {
+    /// The preconditioning stiffness assembled and factored at the start point.
+    fn setup(&mut self, cx: &mut SolverContext) -> Result<bool> {
+        self.factored = cx.pc.is_factored();
+        self.fresh_here = self.factored;
+        Ok(!self.factored || refresh_preconditioner(cx)?)
+    }
+
+    fn iterate(&mut self, cx: &mut SolverContext, ev: &Eval) -> Result<Next> {
+        if self.refresh_next {
+            // Refresh it here, and take this direction on the Jacobian just assembled,
+            // as at the start of the step.
+            if !refresh_preconditioner(cx)? {
+                return Ok(Next::Stop);
+            }
+            self.fresh_here = true;
         }
-        other => other,
+        let eta_k = self.forcing_term(ev, cx.stats.iterations, cx.opts);
+        cx.cons.gap_vector(cx.u, &mut self.gapv);
+        // The first iteration starts where the preconditioning stiffness was just
+        // assembled: it is the exact Jacobian there, so it is the operator too. That
+        // also keeps the Krylov operator linear at a converged plastic state, where a
+        // finite-difference product loads or unloads depending on the direction.
+        let assembled = self.fresh_here;
+        let Some(gmres_its) = self.direction(cx, ev, eta_k, assembled)? else {
+            return Ok(Next::Stop);
+        };
+        self.fresh_here = false;
+        cx.stats.iterations += 1;
+        let Some(next) = cx.take_step(&self.du, ev)? else {
+            return Ok(Next::Stop);
+        };
+        self.refresh_next = self.factored && !assembled && gmres_its > REFRESH_AFTER_GMRES;
+        Ok(Next::Moved(next))
     }
 }
 

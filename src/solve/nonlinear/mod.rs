@@ -1,9 +1,13 @@
 //! Nonlinear solvers behind one seam. A [`NonlinearProblem`] gives residuals and
 //! Jacobians on owned dofs; the solver owns the constraint algebra (prescribed dofs),
-//! the linear solves and the convergence tests.
+//! the linear solves and the convergence tests. A run keeps one [`Solver`] (the
+//! Jacobian's storage, the lagged preconditioner); each solve is a [`SolverContext`]
+//! (PETSc's SNES: `context.rs`) driving the method of [`SolverKind`], a
+//! [`NonlinearSolver`] that provides only its step (`newton.rs`, `bfgs.rs`, `jfnk.rs`).
 
 pub mod bfgs;
 pub mod common;
+pub mod context;
 pub mod jfnk;
 pub mod newton;
 pub mod precond;
@@ -13,6 +17,7 @@ use crate::linalg::matrix::DistMatrix;
 use crate::linalg::PcKind;
 use crate::parallel::Comm;
 use crate::Result;
+pub use context::{Next, NonlinearSolver, Solver, SolverContext};
 pub use precond::Preconditioning;
 
 /// The three nonlinear solvers (DESIGN.md, "Nonlinear solvers").
@@ -42,6 +47,15 @@ impl SolverKind {
             "bfgs" => Some(Self::Bfgs),
             "jfnk" => Some(Self::Jfnk),
             _ => None,
+        }
+    }
+
+    /// The method of this kind for a solve of `n` owned dofs.
+    pub fn method(self, n: usize, opts: &NonlinearOptions) -> Box<dyn NonlinearSolver> {
+        match self {
+            SolverKind::Newton => Box::new(newton::Newton::new(n)),
+            SolverKind::Bfgs => Box::new(bfgs::Bfgs::new(n, opts.bfgs_reform)),
+            SolverKind::Jfnk => Box::new(jfnk::Jfnk::new(n)),
         }
     }
 }
@@ -104,25 +118,6 @@ impl NonlinearOptions {
             overlap: self.pc_overlap,
             ..Default::default()
         }
-    }
-}
-
-/// Solve one load step with the chosen solver (see each solver's module).
-#[allow(clippy::too_many_arguments)]
-pub fn solve(
-    comm: &dyn Comm,
-    problem: &mut dyn NonlinearProblem,
-    u: &mut [f64],
-    r: &mut [f64],
-    prescribed: &[(usize, f64)],
-    k: &mut DistMatrix,
-    pc: &mut Preconditioning,
-    opts: &NonlinearOptions,
-) -> Result<SolveStats> {
-    match opts.kind {
-        SolverKind::Newton => newton::newton(comm, problem, u, r, prescribed, k, pc, opts),
-        SolverKind::Bfgs => bfgs::bfgs(comm, problem, u, r, prescribed, k, pc, opts),
-        SolverKind::Jfnk => jfnk::jfnk(comm, problem, u, r, prescribed, k, pc, opts),
     }
 }
 

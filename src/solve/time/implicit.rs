@@ -19,8 +19,8 @@ use crate::model::dynamics::MassMatrix;
 use crate::model::Model;
 use crate::parallel::Comm;
 use crate::solve::control::StepControl;
-use crate::solve::nonlinear::{solve, NonlinearOptions, NonlinearProblem, Preconditioning};
-use crate::solve::stepping::{Attempt, Flow, Resume, RunTotals, StepRecord};
+use crate::solve::nonlinear::{NonlinearOptions, NonlinearProblem, SolveStats, Solver};
+use crate::solve::stepping::{model_solver, Attempt, Flow, Resume, RunTotals, StepRecord};
 use crate::solve::{Analysis, MassKind, Scheme};
 use crate::{Error, Result};
 use std::time::Instant;
@@ -143,23 +143,9 @@ pub fn run_implicit(
     resume: Option<&Resume>,
     on_step: &mut DynObserver,
 ) -> Result<RunTotals> {
-    let p = scheme_params(analysis);
     let mut ctl = StepControl::new(analysis, opts.max_iterations);
-    let mass = mass_operator(comm, model, analysis.mass);
-    let n = model.n_owned_dofs();
-    let mut k = model.new_matrix(comm);
-    let mut pc = Preconditioning::new(opts.preconditioner, opts.pc_lag, opts.factor_options());
-    if opts.rigid_body_modes || opts.preconditioner.wants_points() || opts.export_system.is_some() {
-        pc = pc.with_points(model.node_points(), opts.rigid_body_modes);
-    }
-    let mut tot = RunTotals::default();
+    let mut run = Implicit::new(comm, model, analysis, opts);
     let t_start = Instant::now();
-    // Multipliers, reference points and massless body DOFs carry no mass: their
-    // "acceleration" is held at zero.
-    let mults = model.algebraic_dofs();
-    let mut fi = vec![0.0; n];
-    let mut fe = vec![0.0; n];
-    let mut r = vec![0.0; n];
     let (mut energy, mut r_old) = match resume.and_then(|x| x.dynamic.as_ref().map(|d| (x, d))) {
         Some((x, d)) => {
             // A restart: the caller set u and the model's state; the rest is here.
@@ -168,102 +154,26 @@ pub fn run_implicit(
             state.a = d.a.clone();
             (d.energy.clone(), d.r_old.clone())
         }
-        None => initial_state(
-            comm, model, state, analysis, opts, &mass, &mults, &mut k, &mut pc, &mut tot, &mut fi,
-            &mut fe, &mut r, t_start, on_step,
-        )?,
+        None => run.initial_state(model, state, analysis, t_start, on_step)?,
     };
 
-    let mut trial = vec![0.0; n];
+    let mut trial = vec![0.0; model.n_owned_dofs()];
     let mut t0 = Instant::now();
-    // Failed attempts at the current step.
-    let mut pending: Vec<Attempt> = Vec::new();
     while let Some((t_done, t1)) = ctl.next() {
         let stage = ctl.stage();
         let h = t1 - t_done;
-        let g1 = model.prescribed(t1);
-        for i in 0..n {
-            trial[i] = p.predict(h, state.u[i], state.v[i], state.a[i]);
-        }
-        // Algebraic unknowns (multipliers, reference points) start from their last values
-        // (they are not integrated in time).
-        for &i in &mults {
-            trial[i] = state.u[i];
-        }
-        let stats = {
-            let mut prob = StepProblem {
-                model,
-                mass: &mass,
-                p,
-                dt: h,
-                t1,
-                old: state,
-                r_old: &r_old,
-                am: vec![0.0; n],
-                ma: vec![0.0; n],
-                fi: vec![0.0; n],
-            };
-            solve(
-                comm, &mut prob, &mut trial, &mut r, &g1, &mut k, &mut pc, opts,
-            )?
-        };
-        tot.add_in(stage, &stats);
+        let stats = run.attempt(model, state, &r_old, (t_done, t1), &mut trial)?;
+        run.tot.add_in(stage, &stats);
         if !stats.converged {
-            let mut stats = stats;
-            if let Some(why) = model.diagnose(comm) {
-                stats.reason = format!("{}; {why}", stats.reason);
-                stats.failure = Some(crate::solve::nonlinear::Failure::StickSlipCycling);
+            if !run.reject(model, &mut ctl, stats, (t_done, t1)) {
+                return Ok(run.tot);
             }
-            model.after_failed_attempt();
-            pc.invalidate();
-            let reason = stats.reason.clone();
-            let kind = stats.failure;
-            pending.push(Attempt {
-                t_start: t_done,
-                t_end: t1,
-                stats,
-            });
-            if let Err(why) = ctl.reject(t1, &reason, "time step") {
-                tot.failure = Some(why);
-                tot.failure_reason = kind;
-                tot.failed_last = pending;
-                return Ok(tot);
-            }
-            tot.retries += 1;
             continue;
         }
-        // Accept: the state at t_{n+1}, its forces (one more evaluation, which also
-        // leaves the material history at u_{n+1} for the commit), energies.
-        let mut a1 = vec![0.0; n];
-        let mut v1 = vec![0.0; n];
-        let mut du = vec![0.0; n];
-        for i in 0..n {
-            a1[i] = p.acceleration(h, trial[i], state.u[i], state.v[i], state.a[i]);
-            v1[i] = p.velocity(h, state.v[i], state.a[i], a1[i]);
-            du[i] = trial[i] - state.u[i];
-        }
-        for &i in &mults {
-            a1[i] = 0.0;
-            v1[i] = 0.0;
-        }
-        model.forces(comm, &trial, t1, &mut fi, &mut fe)?;
-        tot.residual_evaluations += 1;
-        // Persistency: a node pressed against a wall moves with it along the normal. The
-        // Newmark update alone gives a node stopped within one step the reverse of its
-        // approach velocity, and the Taylor bar's foot bounced off the wall.
-        model.persistency(&mut v1, &mut a1, t1, h);
-        model.commit();
-        let (react, g) = support_forces(comm, model, &mass, &a1, &fi, &fe);
-        let mv = momentum(comm, model, &mass, &v1);
-        let en = energy.step(comm, &du, &fi, &g, &v1, &mv);
-        for i in 0..n {
-            r_old[i] = fi[i] - fe[i];
-        }
-        state.u.copy_from_slice(&trial);
-        state.v = v1;
-        state.a = a1;
+        // Accept: the state at t_{n+1}, its forces, energies.
+        let (react, en) = run.accept(model, state, &mut energy, &mut r_old, &trial, (h, t1))?;
         let (step, retries) = ctl.accept(t1, stats.iterations);
-        tot.steps += 1;
+        run.tot.steps += 1;
         let rec = StepRecord {
             step,
             time: t1,
@@ -275,7 +185,7 @@ pub fn run_implicit(
             displacements: model.mean_displacements(comm, &state.u),
             energies: Some(en),
             columns: model.column_values(comm, &state.u, t1),
-            failed: std::mem::take(&mut pending),
+            failed: std::mem::take(&mut run.pending),
         };
         let here = || Resume {
             control: ctl.state(),
@@ -288,89 +198,241 @@ pub fn run_implicit(
             }),
         };
         if on_step(&rec, state, model, Some(&here))? == Flow::Stop {
-            tot.stopped = true;
-            return Ok(tot);
+            run.tot.stopped = true;
+            return Ok(run.tot);
         }
         t0 = Instant::now();
     }
-    tot.converged = true;
-    Ok(tot)
+    run.tot.converged = true;
+    Ok(run.tot)
 }
 
-/// The state at t = 0 (u = g(0) on prescribed dofs, v from the deck, a from
-/// M a = f_ext − f_int) and its energy account and residual, reported as step 0.
-#[allow(clippy::too_many_arguments)]
-fn initial_state(
-    comm: &dyn Comm,
-    model: &mut Model,
-    state: &mut DynState,
-    analysis: &Analysis,
-    opts: &NonlinearOptions,
-    mass: &MassMatrix,
-    mults: &[usize],
-    k: &mut DistMatrix,
-    pc: &mut Preconditioning,
-    tot: &mut RunTotals,
-    fi: &mut [f64],
-    fe: &mut [f64],
-    r: &mut [f64],
-    t_start: Instant,
-    on_step: &mut DynObserver,
-) -> Result<(EnergyAccount, Vec<f64>)> {
-    let n = model.n_owned_dofs();
-    // Initial state: u = g(0) on prescribed dofs, v from the deck (ġ(0) on prescribed
-    // dofs), a from M a = f_ext − f_int on the free dofs (g̈(0) on prescribed ones).
-    let h = 1e-6 * analysis.step;
-    let motion = prescribed_motion(model, 0.0, h);
-    state.u = vec![0.0; n];
-    state.v = model.initial_velocity();
-    for &(d, g, gd, _) in &motion {
-        state.u[d] = g;
-        state.v[d] = gd;
-    }
-    model.forces(comm, &state.u, 0.0, fi, fe)?;
-    let rhs: Vec<f64> = (0..n).map(|i| fe[i] - fi[i]).collect();
-    state.a = vec![0.0; n];
-    let mut a_pres: Vec<(usize, f64)> = motion.iter().map(|m| (m.0, m.3)).collect();
-    a_pres.extend(mults.iter().map(|&d| (d, 0.0)));
-    let st0 = {
-        let mut prob = MassProblem {
-            model,
+/// What an implicit run keeps from step to step besides the dynamic state: the scheme,
+/// the mass operator, the nonlinear solver, the totals and the failed attempts.
+struct Implicit<'a> {
+    comm: &'a dyn Comm,
+    p: AlphaParams,
+    mass: MassMatrix,
+    /// Multipliers, reference points and massless body DOFs carry no mass: their
+    /// "acceleration" is held at zero.
+    mults: Vec<usize>,
+    solver: Solver<'a>,
+    tot: RunTotals,
+    /// Internal and external forces of the last evaluation.
+    fi: Vec<f64>,
+    fe: Vec<f64>,
+    r: Vec<f64>,
+    /// Failed attempts at the current step.
+    pending: Vec<Attempt>,
+}
+
+impl<'a> Implicit<'a> {
+    fn new(
+        comm: &'a dyn Comm,
+        model: &Model,
+        analysis: &Analysis,
+        opts: &'a NonlinearOptions,
+    ) -> Self {
+        let p = scheme_params(analysis);
+        let mass = mass_operator(comm, model, analysis.mass);
+        let n = model.n_owned_dofs();
+        let solver = model_solver(comm, model, opts);
+        Self {
+            comm,
+            p,
             mass,
-            rhs: &rhs,
-        };
-        solve(comm, &mut prob, &mut state.a, r, &a_pres, k, pc, opts)?
-    };
-    tot.add(&st0);
-    pc.invalidate();
-    if !st0.converged {
-        return Err(Error::runtime(format!(
-            "initial acceleration M a₀ = f_ext − f_int did not converge: {}",
-            st0.reason
-        )));
+            mults: model.algebraic_dofs(),
+            solver,
+            tot: RunTotals::default(),
+            fi: vec![0.0; n],
+            fe: vec![0.0; n],
+            r: vec![0.0; n],
+            pending: Vec::new(),
+        }
     }
-    let (react, g) = support_forces(comm, model, mass, &state.a, fi, fe);
-    let mv = momentum(comm, model, mass, &state.v);
-    let ke0 = 0.5 * comm.dot(&state.v, &mv);
-    let energy = EnergyAccount::new(fi.to_vec(), g, ke0);
-    let r_old: Vec<f64> = (0..n).map(|i| fi[i] - fe[i]).collect();
-    on_step(
-        &StepRecord {
-            step: 0,
-            time: 0.0,
-            stage: 0,
-            stats: st0,
-            retries: 0,
-            reactions: model.reactions(comm, &react),
-            wall_seconds: t_start.elapsed().as_secs_f64(),
-            displacements: model.mean_displacements(comm, &state.u),
-            energies: Some(energy.current),
-            columns: model.column_values(comm, &state.u, 0.0),
-            failed: Vec::new(),
-        },
-        state,
-        model,
-        None,
-    )?;
-    Ok((energy, r_old))
+
+    /// Solve the step from `t_done` to `t1` for u_{n+1} into `trial`, from the
+    /// predictor.
+    fn attempt(
+        &mut self,
+        model: &mut Model,
+        state: &DynState,
+        r_old: &[f64],
+        (t_done, t1): (f64, f64),
+        trial: &mut [f64],
+    ) -> Result<SolveStats> {
+        let (p, n, h) = (self.p, trial.len(), t1 - t_done);
+        let g1 = model.prescribed(t1);
+        for i in 0..n {
+            trial[i] = p.predict(h, state.u[i], state.v[i], state.a[i]);
+        }
+        // Algebraic unknowns (multipliers, reference points) start from their last values
+        // (they are not integrated in time).
+        for &i in &self.mults {
+            trial[i] = state.u[i];
+        }
+        let mut prob = StepProblem {
+            model,
+            mass: &self.mass,
+            p,
+            dt: h,
+            t1,
+            old: state,
+            r_old,
+            am: vec![0.0; n],
+            ma: vec![0.0; n],
+            fi: vec![0.0; n],
+        };
+        self.solver
+            .solve(self.comm, &mut prob, trial, &mut self.r, &g1)
+    }
+
+    /// A failed attempt from `t_done` to `t1`: diagnosed, forgotten, the step cut.
+    /// `false`: the run cannot go on (the failure is in the totals).
+    fn reject(
+        &mut self,
+        model: &mut Model,
+        ctl: &mut StepControl,
+        mut stats: SolveStats,
+        (t_done, t1): (f64, f64),
+    ) -> bool {
+        if let Some(why) = model.diagnose(self.comm) {
+            stats.reason = format!("{}; {why}", stats.reason);
+            stats.failure = Some(crate::solve::nonlinear::Failure::StickSlipCycling);
+        }
+        model.after_failed_attempt();
+        self.solver.pc.invalidate();
+        let reason = stats.reason.clone();
+        let kind = stats.failure;
+        self.pending.push(Attempt {
+            t_start: t_done,
+            t_end: t1,
+            stats,
+        });
+        if let Err(why) = ctl.reject(t1, &reason, "time step") {
+            self.tot.failure = Some(why);
+            self.tot.failure_reason = kind;
+            self.tot.failed_last = std::mem::take(&mut self.pending);
+            return false;
+        }
+        self.tot.retries += 1;
+        true
+    }
+
+    /// Accept the converged `trial` of a step of length `h` to `t1`: the state at
+    /// t_{n+1}, its forces (one more evaluation, which also leaves the material history
+    /// at u_{n+1} for the commit) and energies. Returns the support forces and the
+    /// energies.
+    fn accept(
+        &mut self,
+        model: &mut Model,
+        state: &mut DynState,
+        energy: &mut EnergyAccount,
+        r_old: &mut [f64],
+        trial: &[f64],
+        (h, t1): (f64, f64),
+    ) -> Result<(Vec<f64>, super::energy::Energies)> {
+        let (p, n, comm) = (self.p, trial.len(), self.comm);
+        let mut a1 = vec![0.0; n];
+        let mut v1 = vec![0.0; n];
+        let mut du = vec![0.0; n];
+        for i in 0..n {
+            a1[i] = p.acceleration(h, trial[i], state.u[i], state.v[i], state.a[i]);
+            v1[i] = p.velocity(h, state.v[i], state.a[i], a1[i]);
+            du[i] = trial[i] - state.u[i];
+        }
+        for &i in &self.mults {
+            a1[i] = 0.0;
+            v1[i] = 0.0;
+        }
+        model.forces(comm, trial, t1, &mut self.fi, &mut self.fe)?;
+        self.tot.residual_evaluations += 1;
+        // Persistency: a node pressed against a wall moves with it along the normal. The
+        // Newmark update alone gives a node stopped within one step the reverse of its
+        // approach velocity, and the Taylor bar's foot bounced off the wall.
+        model.persistency(&mut v1, &mut a1, t1, h);
+        model.commit();
+        let (react, g) = support_forces(comm, model, &self.mass, &a1, &self.fi, &self.fe);
+        let mv = momentum(comm, model, &self.mass, &v1);
+        let en = energy.step(comm, &du, &self.fi, &g, &v1, &mv);
+        for i in 0..n {
+            r_old[i] = self.fi[i] - self.fe[i];
+        }
+        state.u.copy_from_slice(trial);
+        state.v = v1;
+        state.a = a1;
+        Ok((react, en))
+    }
+
+    /// The state at t = 0 (u = g(0) on prescribed dofs, v from the deck, a from
+    /// M a = f_ext − f_int) and its energy account and residual, reported as step 0.
+    fn initial_state(
+        &mut self,
+        model: &mut Model,
+        state: &mut DynState,
+        analysis: &Analysis,
+        t_start: Instant,
+        on_step: &mut DynObserver,
+    ) -> Result<(EnergyAccount, Vec<f64>)> {
+        let comm = self.comm;
+        let n = model.n_owned_dofs();
+        // Initial state: u = g(0) on prescribed dofs, v from the deck (ġ(0) on prescribed
+        // dofs), a from M a = f_ext − f_int on the free dofs (g̈(0) on prescribed ones).
+        let h = 1e-6 * analysis.step;
+        let motion = prescribed_motion(model, 0.0, h);
+        state.u = vec![0.0; n];
+        state.v = model.initial_velocity();
+        for &(d, g, gd, _) in &motion {
+            state.u[d] = g;
+            state.v[d] = gd;
+        }
+        let (fi, fe) = (&mut self.fi, &mut self.fe);
+        model.forces(comm, &state.u, 0.0, fi, fe)?;
+        let rhs: Vec<f64> = (0..n).map(|i| fe[i] - fi[i]).collect();
+        state.a = vec![0.0; n];
+        let mut a_pres: Vec<(usize, f64)> = motion.iter().map(|m| (m.0, m.3)).collect();
+        a_pres.extend(self.mults.iter().map(|&d| (d, 0.0)));
+        let st0 = {
+            let mut prob = MassProblem {
+                model,
+                mass: &self.mass,
+                rhs: &rhs,
+            };
+            self.solver
+                .solve(comm, &mut prob, &mut state.a, &mut self.r, &a_pres)?
+        };
+        self.tot.add(&st0);
+        self.solver.pc.invalidate();
+        if !st0.converged {
+            return Err(Error::runtime(format!(
+                "initial acceleration M a₀ = f_ext − f_int did not converge: {}",
+                st0.reason
+            )));
+        }
+        let (fi, fe, mass) = (&self.fi, &self.fe, &self.mass);
+        let (react, g) = support_forces(comm, model, mass, &state.a, fi, fe);
+        let mv = momentum(comm, model, mass, &state.v);
+        let ke0 = 0.5 * comm.dot(&state.v, &mv);
+        let energy = EnergyAccount::new(fi.to_vec(), g, ke0);
+        let r_old: Vec<f64> = (0..n).map(|i| fi[i] - fe[i]).collect();
+        on_step(
+            &StepRecord {
+                step: 0,
+                time: 0.0,
+                stage: 0,
+                stats: st0,
+                retries: 0,
+                reactions: model.reactions(comm, &react),
+                wall_seconds: t_start.elapsed().as_secs_f64(),
+                displacements: model.mean_displacements(comm, &state.u),
+                energies: Some(energy.current),
+                columns: model.column_values(comm, &state.u, 0.0),
+                failed: Vec::new(),
+            },
+            state,
+            model,
+            None,
+        )?;
+        Ok((energy, r_old))
+    }
 }
