@@ -559,6 +559,15 @@ fn log_failed_attempts(
     iters.step(last_step + 1, &failed, false);
 }
 
+/// Where a restarted run went on from, for its summary.
+fn restarted_from(restart: &Option<Restart>) -> Option<RestartedFrom> {
+    restart.as_ref().map(|r| RestartedFrom {
+        dir: r.dir.display().to_string(),
+        step: r.step,
+        time: r.time,
+    })
+}
+
 /// What [`run`] has set up for [`execute`]: the model and its settings, the restart
 /// state, and what the summary reports of the set-up (partition origin, the run's
 /// record, its start and phase times so far).
@@ -700,11 +709,7 @@ fn execute(
         failure_reason: totals.failure_reason,
         output_dir: out.display().to_string(),
         run: record,
-        restarted_from: restart.as_ref().map(|r| RestartedFrom {
-            dir: r.dir.display().to_string(),
-            step: r.step,
-            time: r.time,
-        }),
+        restarted_from: restarted_from(&restart),
         stopped: totals.stopped,
         quantities,
     };
