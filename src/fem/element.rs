@@ -9,8 +9,8 @@ pub use super::error::ElementError;
 use super::hybrid::Hybrid;
 use super::kernel::{ElementData, ElementKernel, ElementOutput};
 use super::reduced::Reduced;
-use super::shape::{HEX8, TET4};
-use super::solid::{FBar, Standard};
+use super::shape::{HEX8, TET10, TET4};
+use super::solid::{FBar, MeanDilatation, Standard};
 use crate::mesh::ElemKind;
 
 /// How the element treats volume change.
@@ -98,6 +98,18 @@ pub fn kernel(kind: ElemKind, form: Formulation) -> Box<dyn ElementKernel> {
         (ElemKind::Hex8, Formulation::Eas) => Box::new(Eas),
         (ElemKind::Hex8, Formulation::Hybrid { hourglass }) => Box::new(Hybrid::new(hourglass)),
         (ElemKind::Tet4, _) => Box::new(Standard { tab: &TET4 }),
+        (ElemKind::Tet10, Formulation::Standard) => Box::new(Standard { tab: &TET10 }),
+        // Issue 35, tet10: F-bar and hybrid parts get the mean-dilatation tet10 (J̄ = v/V,
+        // P2/P0 with the constant pressure condensed). A hybrid tet10 has no pressure
+        // unknown yet: the same answers, Newton as F-bar. Reduced and EAS do not apply to
+        // a tet10; until `scene/` refuses them by part (issue 35's formulation check),
+        // they fall back to the standard tet10, which does not lock in bending.
+        (ElemKind::Tet10, Formulation::FBar { .. } | Formulation::Hybrid { .. }) => {
+            Box::new(MeanDilatation { tab: &TET10 })
+        }
+        (ElemKind::Tet10, Formulation::Reduced { .. } | Formulation::Eas) => {
+            Box::new(Standard { tab: &TET10 })
+        }
     }
 }
 
@@ -166,6 +178,18 @@ mod tests {
         ]
     }
 
+    /// The tet above with its midside nodes moved off their edges by up to ~0.04:
+    /// curved edges, a distorted quadratic element.
+    fn tet10() -> Vec<[f64; 3]> {
+        let c = tet();
+        let mut x = c.clone();
+        for (e, [i, j]) in crate::fem::shape::TET10_EDGES.iter().enumerate() {
+            let s = |k: usize| 0.04 * (((5 * e + 2 * k) as f64) * 1.7).sin();
+            x.push(std::array::from_fn(|k| 0.5 * (c[*i][k] + c[*j][k]) + s(k)));
+        }
+        x
+    }
+
     fn mats() -> [Box<dyn Material>; 2] {
         [
             Box::new(NeoHookean::new(10.0, 0.35, 1.0)),
@@ -221,8 +245,60 @@ mod tests {
         Matrix3::new(1.25, 0.2, -0.1, 0.05, 0.9, 0.15, -0.08, 0.1, 1.1)
     }
 
-    fn cases() -> [(ElemKind, Vec<[f64; 3]>); 2] {
-        [(ElemKind::Hex8, hex()), (ElemKind::Tet4, tet())]
+    fn cases() -> [(ElemKind, Vec<[f64; 3]>); 3] {
+        [
+            (ElemKind::Hex8, hex()),
+            (ElemKind::Tet4, tet()),
+            (ElemKind::Tet10, tet10()),
+        ]
+    }
+
+    /// Tet10: a straight-sided one has the tet4's volume; the distorted one passes the
+    /// reference check; a midside node pulled across the opposite face fails it.
+    #[test]
+    fn tet10_volume_and_reference_check() {
+        let c = tet();
+        let mut straight = c.clone();
+        for [i, j] in crate::fem::shape::TET10_EDGES {
+            straight.push(std::array::from_fn(|k| 0.5 * (c[i][k] + c[j][k])));
+        }
+        let v4 = element_volume(ElemKind::Tet4, &c);
+        assert!((element_volume(ElemKind::Tet10, &straight) - v4).abs() < 1e-14);
+        assert!(check_reference(ElemKind::Tet10, &tet10()).is_ok());
+        let mut bad = tet10();
+        // The midside node of edge 0-1 beyond corner 1: the edge folds back at corner 1.
+        bad[4] = std::array::from_fn(|k| 2.0 * c[1][k] - c[0][k]);
+        assert!(check_reference(ElemKind::Tet10, &bad).is_err());
+    }
+
+    /// The mean-dilatation tet10 (F-bar and hybrid parts) does not lock where the
+    /// standard one stiffens: a quadratic bending field on a nearly incompressible
+    /// material, on a straight-sided element (its centroid is the corners' mean, so the
+    /// field's mean dilatation is zero).
+    #[test]
+    fn mean_dilatation_tet10_relieves_locking() {
+        let c = tet();
+        let mut x0 = c.clone();
+        for [i, j] in crate::fem::shape::TET10_EDGES {
+            x0.push(std::array::from_fn(|k| 0.5 * (c[i][k] + c[j][k])));
+        }
+        let zc = (0..4).map(|a| x0[a][2]).sum::<f64>() / 4.0;
+        let u: Vec<[f64; 3]> = x0
+            .iter()
+            .map(|x| [1e-3 * (x[2] - zc) * x[0], 0.0, -0.5e-3 * x[0] * x[0]])
+            .collect();
+        let energy = |form, nu| {
+            let mat = LinearElastic::new(1.0, nu, 1.0);
+            let (f, _) = force_with(ElemKind::Tet10, form, &x0, &u, &mat, false);
+            f.iter()
+                .zip(u.iter().flatten())
+                .map(|(a, b)| a * b)
+                .sum::<f64>()
+        };
+        let s = energy(Formulation::Standard, 0.4999) / energy(Formulation::Standard, 0.3);
+        let b = energy(Formulation::FBAR, 0.4999) / energy(Formulation::FBAR, 0.3);
+        eprintln!("tet10 energy ratio ν 0.4999 / 0.3: standard {s:.3}, mean dilatation {b:.3}");
+        assert!(b < 2.0 && s > 10.0 * b, "standard {s}, mean dilatation {b}");
     }
 
     #[test]

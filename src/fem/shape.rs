@@ -69,6 +69,61 @@ pub const fn tet4_dn(_xi: [f64; 3]) -> [[f64; 3]; 4] {
     ]
 }
 
+/// Edges of the tet10 holding its midside nodes 4..9, in Gmsh's order (VTK swaps the
+/// last two: its node 8 is on edge 1-3 and 9 on 2-3).
+pub const TET10_EDGES: [[usize; 2]; 6] = [[0, 1], [1, 2], [2, 0], [0, 3], [2, 3], [1, 3]];
+
+/// Barycentric coordinates L = (1 − ξ − η − ζ, ξ, η, ζ) and their constant gradients.
+const fn tet_bary(xi: [f64; 3]) -> [f64; 4] {
+    tet4_n(xi)
+}
+
+/// Quadratic tet10 shape functions: corners N_i = L_i (2 L_i − 1), midside nodes
+/// N_ij = 4 L_i L_j (Hughes §3.I, Zienkiewicz & Taylor vol. 1 §6.6).
+pub const fn tet10_n(xi: [f64; 3]) -> [f64; 10] {
+    let l = tet_bary(xi);
+    let mut n = [0.0; 10];
+    let mut a = 0;
+    while a < 4 {
+        n[a] = l[a] * (2.0 * l[a] - 1.0);
+        a += 1;
+    }
+    let mut e = 0;
+    while e < 6 {
+        let [i, j] = TET10_EDGES[e];
+        n[4 + e] = 4.0 * l[i] * l[j];
+        e += 1;
+    }
+    n
+}
+
+/// ∂N_a/∂ξ of the tet10, `[a][j]`.
+pub const fn tet10_dn(xi: [f64; 3]) -> [[f64; 3]; 10] {
+    let l = tet_bary(xi);
+    let dl = tet4_dn(xi);
+    let mut d = [[0.0; 3]; 10];
+    let mut a = 0;
+    while a < 4 {
+        let mut j = 0;
+        while j < 3 {
+            d[a][j] = (4.0 * l[a] - 1.0) * dl[a][j];
+            j += 1;
+        }
+        a += 1;
+    }
+    let mut e = 0;
+    while e < 6 {
+        let [p, q] = TET10_EDGES[e];
+        let mut j = 0;
+        while j < 3 {
+            d[4 + e][j] = 4.0 * (l[p] * dl[q][j] + l[q] * dl[p][j]);
+            j += 1;
+        }
+        e += 1;
+    }
+    d
+}
+
 /// Bilinear quad4 shape functions N_a = ¼ (1 + ξ ξ_a)(1 + η η_a).
 pub const fn quad4_n(xi: [f64; 2]) -> [f64; 4] {
     let mut n = [0.0; 4];
@@ -181,6 +236,34 @@ const fn tri3_table() -> Tabulated<2, 3, 3> {
     t
 }
 
+const fn tet10_table() -> Tabulated<3, 10, 4> {
+    // The 4-point rule of degree 2 (Hughes Table 3.I.2; Abaqus C3D10): barycentric
+    // (a, b, b, b) and permutations, a = (5 + 3√5)/20, b = (5 − √5)/20. The stiffness
+    // integrand Bᵀ C B of an undistorted (straight-sided) tet10 is quadratic, so the
+    // rule is exact for it, and for the volume (constant det J₀); it has no spurious
+    // zero-energy modes on the element.
+    const A: f64 = 0.585_410_196_624_968_5;
+    const B: f64 = 0.138_196_601_125_010_5;
+    let points = [[B, B, B], [A, B, B], [B, A, B], [B, B, A]];
+    let mut t = Tabulated {
+        points,
+        weights: [1.0 / 24.0; 4],
+        n: [[0.0; 10]; 4],
+        dn: [[[0.0; 3]; 10]; 4],
+    };
+    let mut g = 0;
+    while g < 4 {
+        t.n[g] = tet10_n(points[g]);
+        t.dn[g] = tet10_dn(points[g]);
+        g += 1;
+    }
+    t
+}
+
+/// Tet10 with the 4-point degree-2 rule (exact for the stiffness of a straight-sided
+/// element).
+pub const TET10: Tabulated<3, 10, 4> = tet10_table();
+
 /// Hex8 with the 2×2×2 Gauss rule (exact for the trilinear element's mass and volume).
 pub const HEX8: Tabulated<3, 8, 8> = hex8_table();
 /// Tet4 with the 1-point centroid rule (exact: ∇N is constant).
@@ -259,6 +342,10 @@ mod tests {
         for x in PTS3 {
             assert!((hex8_n(x).iter().sum::<f64>() - 1.0).abs() < 1e-14);
             assert!((tet4_n(x).iter().sum::<f64>() - 1.0).abs() < 1e-14);
+            assert!((tet10_n(x).iter().sum::<f64>() - 1.0).abs() < 1e-14);
+            for j in 0..3 {
+                assert!(tet10_dn(x).iter().map(|d| d[j]).sum::<f64>().abs() < 1e-13);
+            }
             for j in 0..3 {
                 assert!(hex8_dn(x).iter().map(|d| d[j]).sum::<f64>().abs() < 1e-14);
             }
@@ -291,6 +378,20 @@ mod tests {
         for (a, p) in tet.iter().enumerate() {
             assert_eq!(tet4_n(*p)[a], 1.0);
         }
+        // Tet10: corners, then the midpoints of its edges.
+        let mut t10: Vec<[f64; 3]> = tet.to_vec();
+        for [i, j] in TET10_EDGES {
+            t10.push(std::array::from_fn(|c| 0.5 * (tet[i][c] + tet[j][c])));
+        }
+        for (a, p) in t10.iter().enumerate() {
+            let n = tet10_n(*p);
+            for (b, v) in n.iter().enumerate() {
+                assert!(
+                    (v - if a == b { 1.0 } else { 0.0 }).abs() < 1e-15,
+                    "{a} {b} {v}"
+                );
+            }
+        }
     }
 
     #[test]
@@ -298,6 +399,7 @@ mod tests {
         for x in PTS3 {
             fd3(hex8_n, hex8_dn, x);
             fd3(tet4_n, tet4_dn, x);
+            fd3(tet10_n, tet10_dn, x);
             fd2(quad4_n, quad4_dn, [x[0], x[1]]);
             fd2(tri3_n, tri3_dn, [x[0], x[1]]);
         }
@@ -323,5 +425,18 @@ mod tests {
             .map(|g| TRI3.weights[g] * TRI3.points[g][0].powi(2))
             .sum();
         assert!((q - 1.0 / 12.0).abs() < 1e-14);
+        // The tet10 rule: weights sum to 1/6, exact for every monomial of degree ≤ 2
+        // (∫ ξ² = 1/60, ∫ ξη = 1/120 on the unit tet), and its tables match.
+        assert!((TET10.weights.iter().sum::<f64>() - 1.0 / 6.0).abs() < 1e-15);
+        let int = |f: &dyn Fn([f64; 3]) -> f64| -> f64 {
+            (0..4).map(|g| TET10.weights[g] * f(TET10.points[g])).sum()
+        };
+        assert!((int(&|p| p[0]) - 1.0 / 24.0).abs() < 1e-15);
+        assert!((int(&|p| p[1] * p[1]) - 1.0 / 60.0).abs() < 1e-15);
+        assert!((int(&|p| p[0] * p[2]) - 1.0 / 120.0).abs() < 1e-15);
+        for g in 0..4 {
+            assert_eq!(TET10.n[g], tet10_n(TET10.points[g]));
+            assert_eq!(TET10.dn[g], tet10_dn(TET10.points[g]));
+        }
     }
 }

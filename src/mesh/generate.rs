@@ -47,6 +47,7 @@ fn cell_template(kind: ElemKind) -> Vec<Vec<usize>> {
                 })
                 .collect()
         }
+        ElemKind::Tet10 => unreachable!("box meshes are hex8 or tet4"),
     }
 }
 
@@ -218,7 +219,7 @@ fn min_corner_det(mesh: &Mesh, e: usize) -> f64 {
     let en = mesh.elem_nodes(e);
     let x = |l: usize| mesh.coords[en[l]];
     match mesh.kinds[e] {
-        ElemKind::Tet4 => triple(x(0), x(1), x(2), x(3)),
+        ElemKind::Tet4 | ElemKind::Tet10 => triple(x(0), x(1), x(2), x(3)),
         ElemKind::Hex8 => HEX_CORNER_EDGES
             .iter()
             .map(|&[c, a, b, d]| triple(x(c), x(a), x(b), x(d)))
@@ -274,7 +275,7 @@ pub fn distort_interior(mesh: &mut Mesh, amount: f64, seed: u64) {
         let en = mesh.elem_nodes(e);
         let edges: &[[usize; 2]] = match mesh.kinds[e] {
             ElemKind::Hex8 => &HEX_EDGES,
-            ElemKind::Tet4 => &TET_EDGES,
+            ElemKind::Tet4 | ElemKind::Tet10 => &TET_EDGES,
         };
         for &[a, b] in edges {
             let len =
@@ -340,7 +341,7 @@ mod tests {
         let x = |l: usize| mesh.coords[en[l]];
         let tet = |a: usize, b: usize, c: usize, d: usize| triple(x(a), x(b), x(c), x(d)) / 6.0;
         match mesh.kinds[e] {
-            ElemKind::Tet4 => tet(0, 1, 2, 3),
+            ElemKind::Tet4 | ElemKind::Tet10 => tet(0, 1, 2, 3),
             ElemKind::Hex8 => {
                 tet(0, 1, 2, 6)
                     + tet(0, 2, 3, 6)
