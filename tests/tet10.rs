@@ -261,3 +261,68 @@ fn tet10_bends_far_better_than_tet4_at_equal_nodes() {
     assert!((d10 / beam - 1.0).abs() < 0.05, "tet10 {d10} vs {beam}");
     assert!(d4 / beam < 0.8, "tet4 {d4} vs {beam}");
 }
+
+/// The formulations a tet10 has (standard; F-bar and hybrid as the mean-dilatation
+/// element): EAS and reduced are refused naming the part, and `auto` gives a nearly
+/// incompressible (ν = 0.4999, neo-Hookean) tet10 cantilever the mean-dilatation
+/// element, which bends as beam theory says (δ = P L³ / 3 E I does not depend on ν),
+/// where the standard tet10 locks.
+#[test]
+fn tet10_formulations_refused_and_auto_does_not_lock() {
+    let msh = tet10_msh([2.0, 1.0, 1.0], [3, 2, 2], 0.15, 0.0);
+    for form in ["eas", "reduced"] {
+        let d = deck("t10-form", &msh, "linear-elastic").replace(
+            "material = \"m\"\n",
+            &format!("material = \"m\"\nformulation = \"{form}\"\n"),
+        );
+        let e = try_run_deck("t10-form", &d)
+            .err()
+            .expect("must be refused")
+            .to_string();
+        assert!(
+            e.contains(&format!("\"{form}\" does not apply to tet10 elements"))
+                && e.contains("part `block`"),
+            "{e}"
+        );
+    }
+    let dir = temp_dir("t10-rubber-mesh");
+    let file = dir.join("beam.msh");
+    std::fs::write(&file, tet10_msh([10.0, 1.0, 1.0], [5, 1, 1], 0.0, 0.0)).unwrap();
+    let tip = |form: &str| -> f64 {
+        let d = DECK
+            .replace("MODEL", "neo-hookean")
+            .replace("nu = 0.3", "nu = 0.4995")
+            .replace("FILE", file.to_str().unwrap())
+            .replace(
+                "material = \"m\"\n",
+                &format!("material = \"m\"\nformulation = \"{form}\"\n"),
+            );
+        let i = d.find("[[boundary]]").unwrap();
+        let j = d.find("[analysis]").unwrap();
+        // Clamped at x = 0, 0.001 in total on the 9 end nodes of the 5×1×1 tet10 beam (two
+        // tri6 faces: 4 corners, 5 midside nodes).
+        let load = "[[boundary]]\ntype = \"fixed\"\nset = \"x0\"\n[[loads]]\ntype = \"nodal\"\nset = \"x1\"\nforce = [0.0, 0.0, 1.1111111111111112e-4]\n";
+        let d = format!("{}{load}{}", &d[..i], &d[j..]);
+        let out = run_deck(&format!("t10-rubber-{form}"), &d);
+        let end: Vec<f64> = out
+            .displacement_by_node()
+            .iter()
+            .filter(|(_, x, _)| (x[0] - 10.0).abs() < 1e-9)
+            .map(|(_, _, u)| u[2])
+            .collect();
+        assert_eq!(end.len(), 9, "end nodes");
+        end.iter().sum::<f64>() / end.len() as f64
+    };
+    let beam = 0.001 * 1000.0 / (3.0 * 100.0 / 12.0);
+    let (auto, standard) = (tip("auto"), tip("standard"));
+    eprintln!(
+        "tet10 cantilever, nu = 0.4995: tip / beam theory: auto (mean dilatation) {:.4}, standard {:.4}",
+        auto / beam,
+        standard / beam
+    );
+    assert!(
+        (auto / beam - 1.0).abs() < 0.1,
+        "auto {auto} vs beam {beam}"
+    );
+    assert!(standard < 0.5 * auto, "standard {standard} vs auto {auto}");
+}

@@ -68,17 +68,13 @@ fn describe(def: &ModelDef, run: &RunSettings) -> String {
             parts_of.join(", ")
         )
     };
-    let parts: Vec<String> = def
-        .part_names
-        .iter()
-        .zip(&def.part_formulation)
-        .map(|(n, f)| format!("{n} ({})", f.describe()))
-        .collect();
+    // Each part's element types and the formulation each gets (scene/parts.rs).
+    let parts: String = run.parts.iter().map(|p| format!("\n    {p}")).collect();
     let mut s = format!(
-        "scene {}: valid\n  units: {}\n  parts: {}\n  nodes: {}\n  elements: {} ({})\n  unknowns: {unknowns}\n  supports: {}\n  node sets: {}\n  surfaces: {}\n  steps: {}\n",
+        "scene {}: valid\n  units: {}\n  parts:{}\n  nodes: {}\n  elements: {} ({})\n  unknowns: {unknowns}\n  supports: {}\n  node sets: {}\n  surfaces: {}\n  steps: {}\n",
         run.name,
         run.units.describe(),
-        parts.join(", "),
+        parts,
         m.n_nodes(),
         m.n_elems(),
         kinds.join(", "),
@@ -87,6 +83,9 @@ fn describe(def: &ModelDef, run: &RunSettings) -> String {
         def.surfaces.iter().map(|(k, v)| format!("{k} ({} faces)", v.len())).collect::<Vec<_>>().join(", "),
         nominal_steps(&run.analysis),
     );
+    for w in &run.warnings {
+        s.push_str(&format!("  warning: {w}\n"));
+    }
     s.push_str(&format!("  contributions: {}\n", def.contributions.len()));
     for c in &def.contributions {
         s.push_str(&format!("    {}\n", c.kind().describe()));

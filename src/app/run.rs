@@ -124,12 +124,7 @@ pub fn setup(comm: &dyn Comm, opts: &RunOptions, phases: &mut Phases) -> Result<
             cache::Origin::Computed => "computed",
             cache::Origin::Trivial => "trivial",
         };
-        let resolved = def
-            .part_names
-            .iter()
-            .zip(&def.part_formulation)
-            .map(|(n, f)| format!("part {n}: {}", f.describe()))
-            .collect();
+        let resolved = run.parts.iter().map(|p| format!("part {p}")).collect();
         Ok((pieces, run, origin.to_string(), resolved))
     })?;
     let (pieces, run, origin, resolved) = match pieces {
@@ -229,6 +224,15 @@ pub fn run(comm: &dyn Comm, opts: &RunOptions) -> Result<RunOutcome> {
     // One run per output directory (rank 0 holds the lock until the run ends).
     let _lock = on_rank0(comm, || crate::output::lock::OutLock::acquire(&out))?;
     let mut log = Log::open(&out, comm.rank() == 0, opts.quiet);
+    // Choices known to lock (scene/parts.rs), once, on rank 0: stderr, even when quiet,
+    // and the log.
+    if comm.rank() == 0 {
+        for w in &settings.warnings {
+            let line = format!("alfe: warning: {w}");
+            eprintln!("{line}");
+            log.file_only(&line);
+        }
+    }
     if settings.analysis.kind != AnalysisKind::Explicit {
         resolved.push(format!(
             "nonlinear = \"{}\", preconditioner = \"{}\", finite-difference length h = {:.4e}",

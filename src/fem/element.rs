@@ -61,7 +61,9 @@ impl Formulation {
     /// The reduced element with its reference hourglass stiffness.
     pub const REDUCED: Formulation = Formulation::Reduced { hourglass: 1.0 };
 
-    /// A short description for `alfe check`: how hex8 elements of the part behave.
+    /// A short description for `alfe check` and the run's record: the formulation and
+    /// its hourglass coefficient, without the element type (the caller names it, since
+    /// a formulation means something only for the types it [`applies`] to).
     pub fn describe(self) -> String {
         let hg = |h: f64| {
             if h > 0.0 {
@@ -71,11 +73,22 @@ impl Formulation {
             }
         };
         match self {
-            Formulation::Standard => "standard hex8".into(),
-            Formulation::FBar { hourglass } => format!("F-bar hex8{}", hg(hourglass)),
-            Formulation::Reduced { hourglass } => format!("reduced hex8, hourglass {hourglass}"),
-            Formulation::Eas => "EAS hex8".into(),
-            Formulation::Hybrid { hourglass } => format!("hybrid hex8{}", hg(hourglass)),
+            Formulation::Standard => "standard".into(),
+            Formulation::FBar { hourglass } => format!("F-bar{}", hg(hourglass)),
+            Formulation::Reduced { hourglass } => format!("reduced, hourglass {hourglass}"),
+            Formulation::Eas => "EAS".into(),
+            Formulation::Hybrid { hourglass } => format!("hybrid{}", hg(hourglass)),
+        }
+    }
+
+    /// The deck's name of the formulation (`formulation = "..."`).
+    pub fn deck_name(self) -> &'static str {
+        match self {
+            Formulation::Standard => "standard",
+            Formulation::FBar { .. } => "fbar",
+            Formulation::Reduced { .. } => "reduced",
+            Formulation::Eas => "eas",
+            Formulation::Hybrid { .. } => "hybrid",
         }
     }
 
@@ -85,11 +98,39 @@ impl Formulation {
     }
 }
 
+/// Whether `form` is a formulation of `kind`: hex8 has them all; tet4 only the standard
+/// one-point element (F-bar's J̄ is its own J, and it has no EAS, reduced or hybrid
+/// kernel). The deck refuses a formulation that does not apply (`scene/parts.rs`); a
+/// new element type adds its arm here and in [`kernel`].
+pub fn applies(kind: ElemKind, form: Formulation) -> bool {
+    match kind {
+        ElemKind::Hex8 => true,
+        ElemKind::Tet4 => form == Formulation::Standard,
+        // F-bar and hybrid are both the mean-dilatation tet10 ([`kernel`]).
+        ElemKind::Tet10 => matches!(
+            form,
+            Formulation::Standard | Formulation::FBar { .. } | Formulation::Hybrid { .. }
+        ),
+    }
+}
+
+/// [`Formulation::describe`] as an element of `kind` gets it: F-bar and hybrid tet10 are
+/// the mean-dilatation element.
+pub fn describe_for(kind: ElemKind, form: Formulation) -> String {
+    match (kind, form) {
+        (ElemKind::Tet10, Formulation::FBar { .. } | Formulation::Hybrid { .. }) => {
+            "mean dilatation (P2/P0, pressure condensed)".into()
+        }
+        _ => form.describe(),
+    }
+}
+
 /// The kernel of an element of `kind` under `form`.
 ///
-/// Only hex8 tells the formulations apart; a tet4 is the standard one-point element
-/// whatever the part asks for (issue 35 makes a formulation that does not apply to a
-/// kind an error, in `scene/`).
+/// Only hex8 tells the formulations apart. A tet4 is the standard one-point element: the
+/// deck refuses any other formulation on a tet4 part ([`applies`]), and a part that mixes
+/// hex8 and tet4 under `formulation = "auto"` gives its hex8 auto's choice and its tet4
+/// this one (`alfe check` prints both, and warns when the tet4 lock).
 pub fn kernel(kind: ElemKind, form: Formulation) -> Box<dyn ElementKernel> {
     match (kind, form) {
         (ElemKind::Hex8, Formulation::Standard) => Box::new(Standard { tab: &HEX8 }),
@@ -102,8 +143,8 @@ pub fn kernel(kind: ElemKind, form: Formulation) -> Box<dyn ElementKernel> {
         // Issue 35, tet10: F-bar and hybrid parts get the mean-dilatation tet10 (J̄ = v/V,
         // P2/P0 with the constant pressure condensed). A hybrid tet10 has no pressure
         // unknown yet: the same answers, Newton as F-bar. Reduced and EAS do not apply to
-        // a tet10; until `scene/` refuses them by part (issue 35's formulation check),
-        // they fall back to the standard tet10, which does not lock in bending.
+        // a tet10: `scene/` refuses them by part ([`applies`]); were one to arrive here it
+        // would get the standard tet10, which does not lock in bending.
         (ElemKind::Tet10, Formulation::FBar { .. } | Formulation::Hybrid { .. }) => {
             Box::new(MeanDilatation { tab: &TET10 })
         }
@@ -138,6 +179,31 @@ pub fn element_stress(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// hex8 has every formulation; tet4 only the standard one (the deck refuses the
+    /// rest), and describe() names the formulation alone.
+    #[test]
+    fn formulations_apply_to_the_element_types_that_have_them() {
+        for f in [
+            Formulation::Standard,
+            Formulation::FBAR,
+            Formulation::REDUCED,
+            Formulation::Eas,
+            Formulation::Hybrid { hourglass: 0.0 },
+        ] {
+            assert!(applies(ElemKind::Hex8, f));
+            assert_eq!(applies(ElemKind::Tet4, f), f == Formulation::Standard);
+            assert_eq!(
+                applies(ElemKind::Tet10, f),
+                !matches!(f, Formulation::Reduced { .. } | Formulation::Eas)
+            );
+            assert!(!f.describe().contains("hex8"), "{}", f.describe());
+        }
+        assert_eq!(
+            Formulation::FBar { hourglass: 2.0 }.describe(),
+            "F-bar, hourglass 2"
+        );
+    }
     use crate::fem::measure::{char_length, check_reference, element_volume, von_mises};
     use crate::fem::shape::HEX8_NODES;
     use crate::material::{Kinematics, LinearElastic, Material, NeoHookean, StressPoint};

@@ -67,6 +67,7 @@ pub fn build(deck: &Deck, deck_dir: &Path) -> Result<Scene> {
     contributions.extend(couplings.into_iter().map(ContributionDef::Coupling));
     contributions.extend(pairs.into_iter().map(ContributionDef::Pairs));
     contributions.extend(bolts.into_iter().map(ContributionDef::Pairs));
+    let (part_descriptions, warnings) = (parts.descriptions, parts.warnings);
     let model = ModelDef {
         partition: settings::partition_method(deck)?,
         contributions,
@@ -85,6 +86,8 @@ pub fn build(deck: &Deck, deck_dir: &Path) -> Result<Scene> {
     };
     let mut run = settings::run_settings(deck, &timeline);
     run.quantities = settings::quantities(deck)?;
+    run.parts = part_descriptions;
+    run.warnings = warnings;
     Ok(Scene { model, run })
 }
 

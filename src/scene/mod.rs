@@ -51,6 +51,15 @@ pub struct RunSettings {
     /// The scene's quantities of interest.
     #[serde(default)]
     pub quantities: Vec<crate::output::quantities::QuantityDef>,
+    /// Per part, its element types and the formulation each gets, truthfully (what
+    /// `alfe check` prints and the run's record keeps).
+    #[serde(default)]
+    pub parts: Vec<String>,
+    /// Choices known to lock (`parts[i]` with standard elements and ν > 0.45, a sheet
+    /// of elements that lock in bending): printed by `alfe check`, and once at the start
+    /// of `alfe run` on rank 0 (stderr and the log).
+    #[serde(default)]
+    pub warnings: Vec<String>,
 }
 
 /// When fields are written.

@@ -3,7 +3,7 @@
 
 use super::check::err;
 use super::deck::*;
-use crate::fem::element::Formulation;
+use crate::fem::element::{applies, describe_for, Formulation};
 use crate::fem::measure::check_reference;
 use crate::material::Hardening;
 use crate::mesh::cylinder::{cylinder_mesh, ring_mesh, CylinderSpec, RingSpec};
@@ -22,6 +22,11 @@ pub(super) struct Parts {
     pub formulation: Vec<Formulation>,
     /// The nodes of each part in the appended mesh.
     pub nodes: Vec<BTreeSet<usize>>,
+    /// Per part, for `alfe check`: its element types and the formulation each gets
+    /// (`block: 5128 tet4, standard (locks: nu = 0.4995 > 0.45)`).
+    pub descriptions: Vec<String>,
+    /// Choices known to lock, one line each (`alfe check`, and the log of `alfe run`).
+    pub warnings: Vec<String>,
 }
 
 /// Every `[[materials]]` entry checked and resolved, in deck order.
@@ -51,6 +56,8 @@ pub(super) fn parts(
         material: Vec::new(),
         formulation: Vec::new(),
         nodes: Vec::new(),
+        descriptions: Vec::new(),
+        warnings: Vec::new(),
     };
     for (pi, p) in deck.parts.iter().enumerate() {
         let f = format!("parts[{pi}]");
@@ -71,11 +78,14 @@ pub(super) fn parts(
         };
         out.material.push(mi);
         let explicit = deck.analysis.kind == AnalysisKind::Explicit;
-        out.formulation
-            .push(part_formulation_of(p, &materials[mi].1, &f, explicit)?);
+        let form = part_formulation_of(p, &materials[mi].1, &f, explicit)?;
         let mut pm = part_mesh(&p.mesh, &f, pi as u32, deck_dir)?;
         place(&mut pm, p, &f)?;
         check_elements(&pm, &f, &p.name)?;
+        let fit = fit_to_elements(p, &f, form, &pm, &materials[mi].1, explicit)?;
+        out.formulation.push(fit.formulation);
+        out.descriptions.push(fit.description);
+        out.warnings.extend(fit.warnings);
         let n0 = out.mesh.n_nodes();
         out.nodes.push((n0..n0 + pm.n_nodes()).collect());
         out.mesh.append(&pm);
@@ -708,7 +718,12 @@ fn material_def(m: &MaterialDeck, f: &str, deck: &Deck) -> Result<MaterialDef> {
 /// and implicit analyses (Newton converges there as on compressible solids: rubber-indent
 /// newton 412 → 144 iterations, cook-membrane 83 → 16; README "Hybrid elements"), F-bar
 /// for them in explicit runs and for plastic parts (J2 gains nothing from the pressure
-/// unknown: plastic-bar 113 → 130 iterations), standard hex8 otherwise.
+/// unknown: plastic-bar 113 → 130 iterations), standard hex8 otherwise. A part meshed
+/// as a sheet (`kind = "sheet"`, extruded from a surface) takes EAS whatever its material:
+/// one or two elements through the thickness must bend (a 60 × 20 × 1 plate, 24 × 8
+/// quads, one layer: standard 24 %, F-bar 27 %, reduced 25 % of beam theory, EAS
+/// −0.03 %; `tests/element_choices.rs`). Which element types
+/// the choice applies to is [`fit_to_elements`]'s business, once the mesh is known.
 fn part_formulation_of(
     p: &PartDeck,
     material: &MaterialDef,
@@ -737,6 +752,7 @@ fn part_formulation_of(
             }
             Formulation::Hybrid { hourglass: 0.0 }
         }
+        FormulationDeck::Auto if is_sheet(p) => Formulation::Eas,
         FormulationDeck::Auto if material.wants_hybrid() && !explicit => {
             Formulation::Hybrid { hourglass: 0.0 }
         }
@@ -762,5 +778,261 @@ fn part_formulation_of(
              elements are standard or EAS (set formulation = \"fbar\", \"hybrid\" or \
              \"reduced\")",
         )),
+    }
+}
+
+/// Whether the part is meshed as a sheet: a surface extruded through its thickness, one
+/// or a few elements across it, which must bend.
+fn is_sheet(p: &PartDeck) -> bool {
+    matches!(p.mesh, MeshDeck::Sheet { .. })
+}
+
+/// Poisson's ratio above which the standard hex8 and tet4 lock (volumetric locking: the
+/// constraint J = 1 at every point); `auto` leaves standard elements below it.
+pub(crate) const LOCKING_NU: f64 = 0.45;
+
+/// A part's formulation checked against its element types, what `alfe check` says of
+/// it, and the warnings its choice earns.
+struct Fit {
+    /// What the model stores for the part: `form`, or standard when `form` applies to
+    /// none of its element types (a tet4 part under `auto`).
+    formulation: Formulation,
+    description: String,
+    warnings: Vec<String>,
+}
+
+/// The formulations there are (for the list of those that apply to an element type).
+const ALL_FORMULATIONS: [Formulation; 5] = [
+    Formulation::Standard,
+    Formulation::FBAR,
+    Formulation::REDUCED,
+    Formulation::Eas,
+    Formulation::Hybrid { hourglass: 0.0 },
+];
+
+/// Check `form` (the deck's choice, or `auto`'s) against the element types of the part's
+/// mesh: a formulation the deck names that does not apply to one of them is an error at
+/// `parts[i].formulation`; under `auto` an element type it does not apply to takes the
+/// standard element. Then describe the part for `alfe check` and warn on a choice known to
+/// lock: standard elements (tet4 always) with ν > [`LOCKING_NU`], and a sheet of
+/// elements that lock in bending (anything but EAS).
+fn fit_to_elements(
+    p: &PartDeck,
+    f: &str,
+    form: Formulation,
+    mesh: &Mesh,
+    material: &MaterialDef,
+    explicit: bool,
+) -> Result<Fit> {
+    let name = &p.name;
+    let mut counts: Vec<(ElemKind, usize)> = Vec::new();
+    for &k in &mesh.kinds {
+        match counts.iter_mut().find(|c| c.0 == k) {
+            Some(c) => c.1 += 1,
+            None => counts.push((k, 1)),
+        }
+    }
+    counts.sort_by_key(|c| c.0.name());
+    let auto = p.formulation == FormulationDeck::Auto;
+    if !auto {
+        if let Some(&(k, n)) = counts.iter().find(|c| !applies(c.0, form)) {
+            let of = ALL_FORMULATIONS
+                .iter()
+                .filter(|&&g| applies(k, g))
+                .map(|g| g.deck_name())
+                .collect::<Vec<_>>();
+            let total = mesh.n_elems();
+            let share = if n == total {
+                format!("its {n} elements are {}", k.name())
+            } else {
+                format!("{n} of its {total} elements are {}", k.name())
+            };
+            return Err(err(
+                format!("{f}.formulation"),
+                format!(
+                    "\"{}\" does not apply to {k} elements (part `{name}`: {share}); {k} has \
+                     only the {} formulation{}; set formulation = \"auto\" or \"{}\", or \
+                     mesh the part with hex8",
+                    form.deck_name(),
+                    of.join(", "),
+                    if of.len() == 1 { "" } else { "s" },
+                    of[0],
+                    k = k.name(),
+                ),
+            ));
+        }
+    }
+    let stored = if counts.iter().any(|c| applies(c.0, form)) {
+        form
+    } else {
+        Formulation::Standard
+    };
+    if stored != form && p.hourglass.is_some() {
+        return Err(err(
+            format!("{f}.hourglass"),
+            format!(
+                "part `{name}` has no element with an hourglass spring (its elements take \
+                 the standard formulation)"
+            ),
+        ));
+    }
+    // Each element type's formulation, and whether it locks.
+    let nu = material.nu();
+    let sheet = match p.mesh {
+        MeshDeck::Sheet { layers, .. } => Some(layers),
+        _ => None,
+    };
+    let mut warnings = Vec::new();
+    let mut pieces = Vec::new();
+    let what_auto = || -> String {
+        let mut q = p.clone();
+        q.formulation = FormulationDeck::Auto;
+        q.hourglass = None;
+        match part_formulation_of(&q, material, f, explicit) {
+            Ok(g) if counts.iter().all(|c| applies(c.0, g)) && g != Formulation::Standard => {
+                format!("formulation = \"auto\" (here {})", g.describe())
+            }
+            _ => "formulation = \"fbar\" or \"hybrid\"".into(),
+        }
+    };
+    for &(k, n) in &counts {
+        let g = if applies(k, stored) {
+            stored
+        } else {
+            Formulation::Standard
+        };
+        let mut locks = Vec::new();
+        if g == Formulation::Standard && nu > LOCKING_NU {
+            locks.push(format!("nu = {nu} > {LOCKING_NU}"));
+            let instead = if applies(k, Formulation::FBAR) {
+                format!("use {}", what_auto())
+            } else {
+                format!(
+                    "{} has no other formulation: mesh the part with hex8 and use \
+                     formulation = \"auto\" (hybrid or F-bar)",
+                    k.name()
+                )
+            };
+            warnings.push(format!(
+                "part `{name}` ({f}): {n} {k} with the {g} formulation lock at nu = {nu} > \
+                 {LOCKING_NU} (volumetric locking: forces and stiffness come out too high, \
+                 several times over as nu nears 0.5); {instead}",
+                k = k.name(),
+                g = describe_for(k, g),
+            ));
+        }
+        if let Some(layers) = sheet {
+            if g != Formulation::Eas {
+                locks.push("in bending, a sheet".into());
+                warnings.push(format!(
+                    "part `{name}` ({f}): a sheet of {n} {k} ({layers} through the thickness) \
+                     with the {g} formulation locks in bending (a 60 x 20 x 1 plate under a tip load \
+                     deflects a quarter of beam theory's answer with standard, F-bar or \
+                     reduced hex8); use formulation = \"auto\" or \"eas\" (EAS, the \
+                     solid-shell element: within 0.1 %)",
+                    k = k.name(),
+                    g = describe_for(k, g),
+                ));
+            }
+        }
+        let locks = if locks.is_empty() {
+            String::new()
+        } else {
+            format!(" (locks: {})", locks.join("; "))
+        };
+        pieces.push((format!("{n} {}", k.name()), describe_for(k, g), locks));
+    }
+    let kinds = pieces
+        .iter()
+        .map(|p| p.0.clone())
+        .collect::<Vec<_>>()
+        .join(", ");
+    let sheet_note = match sheet {
+        Some(l) => format!(" (sheet, {l} through the thickness)"),
+        None => String::new(),
+    };
+    let description = if pieces.iter().all(|q| q.1 == pieces[0].1) {
+        let locks: Vec<&str> = pieces
+            .iter()
+            .map(|q| q.2.as_str())
+            .filter(|l| !l.is_empty())
+            .collect();
+        format!(
+            "{name}: {kinds}{sheet_note}, {}{}",
+            pieces[0].1,
+            locks.first().copied().unwrap_or("")
+        )
+    } else {
+        format!(
+            "{name}: {}{sheet_note}",
+            pieces
+                .iter()
+                .map(|q| format!("{} {}{}", q.0, q.1, q.2))
+                .collect::<Vec<_>>()
+                .join(", ")
+        )
+    };
+    Ok(Fit {
+        formulation: stored,
+        description,
+        warnings,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A part of 2 × 2 × 2 hex8 and, beside it, 6 × 8 tet4 (as a Gmsh file may mix them).
+    fn mixed() -> Mesh {
+        let spec = |origin: [f64; 3], kind| BoxSpec {
+            origin,
+            size: [1.0; 3],
+            cells: [2, 2, 2],
+            grading: [1.0; 3],
+            kind,
+        };
+        let mut m = box_mesh(&spec([0.0; 3], ElemKind::Hex8), 0);
+        m.append(&box_mesh(&spec([2.0, 0.0, 0.0], ElemKind::Tet4), 0));
+        m
+    }
+
+    fn part(formulation: &str) -> PartDeck {
+        toml::from_str(&format!(
+            "name = \"b\"\nmaterial = \"m\"\nformulation = \"{formulation}\"\nmesh = {{ kind = \"box\", size = [1, 1, 1], cells = [1, 1, 1] }}"
+        ))
+        .unwrap()
+    }
+
+    /// A mixed hex8/tet4 part: `auto` gives its hex8 auto's choice and its tet4 the
+    /// standard element, says so, and warns on the tet4 alone; a formulation named in the
+    /// deck that does not apply to its tet4 is an error naming the share of them.
+    #[test]
+    fn a_mixed_part_says_what_each_element_type_gets() {
+        let rubber = MaterialDef::NeoHookean {
+            e: 3.0,
+            nu: 0.4995,
+            density: 0.0,
+        };
+        let (m, p) = (mixed(), part("auto"));
+        let form = part_formulation_of(&p, &rubber, "parts[0]", false).unwrap();
+        let fit = fit_to_elements(&p, "parts[0]", form, &m, &rubber, false).unwrap();
+        assert!(fit.formulation.is_hybrid());
+        assert_eq!(
+            fit.description,
+            "b: 8 hex8 hybrid, 48 tet4 standard (locks: nu = 0.4995 > 0.45)"
+        );
+        assert_eq!(fit.warnings.len(), 1, "{:?}", fit.warnings);
+        assert!(fit.warnings[0].starts_with("part `b` (parts[0]): 48 tet4 with the standard"));
+        let p = part("fbar");
+        let form = part_formulation_of(&p, &rubber, "parts[0]", false).unwrap();
+        let e = fit_to_elements(&p, "parts[0]", form, &m, &rubber, false)
+            .err()
+            .unwrap()
+            .to_string();
+        assert!(
+            e.contains("parts[0].formulation: \"fbar\" does not apply to tet4 elements (part `b`: 48 of its 56 elements are tet4)"),
+            "{e}"
+        );
     }
 }

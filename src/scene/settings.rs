@@ -258,6 +258,8 @@ pub(super) fn run_settings(deck: &Deck, timeline: &Timeline) -> RunSettings {
         },
         echo: String::new(),
         quantities: Vec::new(),
+        parts: Vec::new(),
+        warnings: Vec::new(),
     }
 }
 

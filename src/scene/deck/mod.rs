@@ -209,13 +209,15 @@ pub enum HardeningDeck {
     },
 }
 
-/// How a part's hex8 elements treat volume change.
+/// How a part's hex8 elements treat volume change (tet4 has the standard element only:
+/// any other named formulation is an error on a part with tet4).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize, Default)]
 #[serde(rename_all = "kebab-case")]
 pub enum FormulationDeck {
-    /// Hybrid where the material is nearly incompressible (ν ≥ 0.45) and hyperelastic
-    /// in a static or implicit analysis; F-bar there in explicit runs and for plastic
-    /// parts (isochoric flow); standard otherwise.
+    /// EAS for a part meshed as a sheet; hybrid where the material is nearly
+    /// incompressible (ν ≥ 0.45) and hyperelastic in a static or implicit analysis;
+    /// F-bar there in explicit runs and for plastic parts (isochoric flow); standard
+    /// otherwise (and for tet4 always).
     #[default]
     Auto,
     /// Full integration of F: locks for ν → 0.5 and in plastic flow.
