@@ -9,6 +9,7 @@ mod context;
 pub mod coupling;
 pub mod deck;
 mod dynamics;
+mod formulation;
 mod loads;
 pub mod overrides;
 pub mod pairs;
