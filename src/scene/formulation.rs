@@ -202,13 +202,13 @@ pub(super) fn fit_to_elements(
     };
     let mut warnings = Vec::new();
     let mut pieces = Vec::new();
-    let what_auto = || -> String {
+    let what_auto = |k: ElemKind| -> String {
         let mut q = p.clone();
         q.formulation = FormulationDeck::Auto;
         q.hourglass = None;
         match part_formulation_of(&q, material, f, explicit) {
             Ok(g) if counts.iter().all(|c| applies(c.0, g)) && g != Formulation::Standard => {
-                format!("formulation = \"auto\" (here {})", g.describe())
+                format!("formulation = \"auto\" (here {})", describe_for(k, g))
             }
             _ => "formulation = \"fbar\" or \"hybrid\"".into(),
         }
@@ -223,7 +223,7 @@ pub(super) fn fit_to_elements(
         if g == Formulation::Standard && nu > LOCKING_NU {
             locks.push(format!("nu = {nu} > {LOCKING_NU}"));
             let instead = if applies(k, Formulation::FBAR) {
-                format!("use {}", what_auto())
+                format!("use {}", what_auto(k))
             } else {
                 format!(
                     "{} has no other formulation: mesh the part with hex8 and use \
