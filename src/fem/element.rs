@@ -6,7 +6,7 @@
 
 use super::eas::Eas;
 pub use super::error::ElementError;
-use super::hybrid::Hybrid;
+use super::hybrid::{Hybrid, HybridTet10};
 use super::kernel::{ElementData, ElementKernel, ElementOutput};
 use super::reduced::Reduced;
 use super::shape::{HEX8, TET10, TET4};
@@ -115,11 +115,14 @@ pub fn applies(kind: ElemKind, form: Formulation) -> bool {
 }
 
 /// [`Formulation::describe`] as an element of `kind` gets it: F-bar and hybrid tet10 are
-/// the mean-dilatation element.
+/// the mean-dilatation element, its pressure condensed or an unknown.
 pub fn describe_for(kind: ElemKind, form: Formulation) -> String {
     match (kind, form) {
-        (ElemKind::Tet10, Formulation::FBar { .. } | Formulation::Hybrid { .. }) => {
+        (ElemKind::Tet10, Formulation::FBar { .. }) => {
             "mean dilatation (P2/P0, pressure condensed)".into()
+        }
+        (ElemKind::Tet10, Formulation::Hybrid { .. }) => {
+            "hybrid (P2/P0: mean dilatation with its pressure an unknown)".into()
         }
         _ => form.describe(),
     }
@@ -140,14 +143,13 @@ pub fn kernel(kind: ElemKind, form: Formulation) -> Box<dyn ElementKernel> {
         (ElemKind::Hex8, Formulation::Hybrid { hourglass }) => Box::new(Hybrid::new(hourglass)),
         (ElemKind::Tet4, _) => Box::new(Standard { tab: &TET4 }),
         (ElemKind::Tet10, Formulation::Standard) => Box::new(Standard { tab: &TET10 }),
-        // Issue 35, tet10: F-bar and hybrid parts get the mean-dilatation tet10 (J̄ = v/V,
-        // P2/P0 with the constant pressure condensed). A hybrid tet10 has no pressure
-        // unknown yet: the same answers, Newton as F-bar. Reduced and EAS do not apply to
+        // Issue 35, tet10: F-bar parts get the mean-dilatation tet10 (J̄ = v/V, P2/P0
+        // with the constant pressure condensed), hybrid parts the same element with its
+        // pressure an unknown (the hybrid hex8's Newton). Reduced and EAS do not apply to
         // a tet10: `scene/` refuses them by part ([`applies`]); were one to arrive here it
         // would get the standard tet10, which does not lock in bending.
-        (ElemKind::Tet10, Formulation::FBar { .. } | Formulation::Hybrid { .. }) => {
-            Box::new(MeanDilatation { tab: &TET10 })
-        }
+        (ElemKind::Tet10, Formulation::FBar { .. }) => Box::new(MeanDilatation { tab: &TET10 }),
+        (ElemKind::Tet10, Formulation::Hybrid { .. }) => Box::new(HybridTet10::default()),
         (ElemKind::Tet10, Formulation::Reduced { .. } | Formulation::Eas) => {
             Box::new(Standard { tab: &TET10 })
         }

@@ -161,6 +161,35 @@ pub const fn tri3_dn(_xi: [f64; 2]) -> [[f64; 2]; 3] {
     [[-1.0, -1.0], [1.0, 0.0], [0.0, 1.0]]
 }
 
+/// Quadratic tri6 shape functions: corners (0,0), (1,0), (0,1), then the midside nodes
+/// of edges 0-1, 1-2, 2-0 (Gmsh's order, the tet10's face order): N = L(2L − 1) at a
+/// corner, 4 L_i L_j at a midside node, with L = (1 − ξ − η, ξ, η).
+pub const fn tri6_n(xi: [f64; 2]) -> [f64; 6] {
+    let l = [1.0 - xi[0] - xi[1], xi[0], xi[1]];
+    [
+        l[0] * (2.0 * l[0] - 1.0),
+        l[1] * (2.0 * l[1] - 1.0),
+        l[2] * (2.0 * l[2] - 1.0),
+        4.0 * l[0] * l[1],
+        4.0 * l[1] * l[2],
+        4.0 * l[2] * l[0],
+    ]
+}
+
+/// ∂N_a/∂ξ of the tri6 (∂L/∂ξ = (−1, 1, 0), ∂L/∂η = (−1, 0, 1)).
+pub const fn tri6_dn(xi: [f64; 2]) -> [[f64; 2]; 6] {
+    let l = [1.0 - xi[0] - xi[1], xi[0], xi[1]];
+    let c0 = 1.0 - 4.0 * l[0];
+    [
+        [c0, c0],
+        [4.0 * l[1] - 1.0, 0.0],
+        [0.0, 4.0 * l[2] - 1.0],
+        [4.0 * (l[0] - l[1]), -4.0 * l[1]],
+        [4.0 * l[2], 4.0 * l[1]],
+        [-4.0 * l[2], 4.0 * (l[0] - l[2])],
+    ]
+}
+
 /// A reference element's shape functions tabulated at its integration rule:
 /// dimension `D`, `N` nodes, `G` points.
 #[derive(Debug, Clone, Copy)]
@@ -236,6 +265,33 @@ const fn tri3_table() -> Tabulated<2, 3, 3> {
     t
 }
 
+const fn tri6_table() -> Tabulated<2, 6, 6> {
+    // Dunavant's 6-point rule of degree 4 (Strang–Fix): barycentric (a, b, b) with
+    // a = 0.108103018168070, b = 0.445948490915965, weight 0.223381589678011, and
+    // (c, d, d) with c = 0.816847572980459, d = 0.091576213509771, weight
+    // 0.109951743655322 (weights for area 1, halved here).
+    const A: f64 = 0.108_103_018_168_070;
+    const B: f64 = 0.445_948_490_915_965;
+    const C: f64 = 0.816_847_572_980_459;
+    const D: f64 = 0.091_576_213_509_771;
+    const WA: f64 = 0.5 * 0.223_381_589_678_011;
+    const WC: f64 = 0.5 * 0.109_951_743_655_322;
+    let points = [[B, B], [A, B], [B, A], [D, D], [C, D], [D, C]];
+    let mut t = Tabulated {
+        points,
+        weights: [WA, WA, WA, WC, WC, WC],
+        n: [[0.0; 6]; 6],
+        dn: [[[0.0; 2]; 6]; 6],
+    };
+    let mut g = 0;
+    while g < 6 {
+        t.n[g] = tri6_n(points[g]);
+        t.dn[g] = tri6_dn(points[g]);
+        g += 1;
+    }
+    t
+}
+
 const fn tet10_table() -> Tabulated<3, 10, 4> {
     // The 4-point rule of degree 2 (Hughes Table 3.I.2; Abaqus C3D10): barycentric
     // (a, b, b, b) and permutations, a = (5 + 3√5)/20, b = (5 − √5)/20. The stiffness
@@ -275,6 +331,9 @@ pub const TET4: Tabulated<3, 4, 1> = Tabulated {
 };
 /// Quad4 face with the 2×2 Gauss rule (exact for the area vector x,ξ × x,η).
 pub const QUAD4: Tabulated<2, 4, 4> = quad4_table();
+/// Tri6 face with the 6-point degree-4 rule: N_a (degree 2) times the area vector of a
+/// curved face (degree 2) is exact; a flat face needs degree 2 only.
+pub const TRI6: Tabulated<2, 6, 6> = tri6_table();
 /// Tri3 face with the 3-point rule (N_a times constant area vector needs degree 1; the
 /// extra points keep consistent face masses exact later).
 pub const TRI3: Tabulated<2, 3, 3> = tri3_table();

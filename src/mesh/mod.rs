@@ -1,4 +1,4 @@
-//! Meshes: nodes, elements (hex8, tet4), named node sets and faces, generators and readers.
+//! Meshes: nodes, elements (hex8, tet4, tet10), named node sets and faces, generators and readers.
 //!
 //! A [`Mesh`] is the serial, whole-model mesh that rank 0 builds or reads before it
 //! partitions; ranks receive their pieces through `partition::distribute`.
@@ -7,6 +7,7 @@ pub mod blocks;
 pub mod cylinder;
 pub mod generate;
 pub mod gmsh;
+pub mod quadratic;
 pub mod select;
 pub mod sheet;
 

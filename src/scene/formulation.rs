@@ -226,8 +226,9 @@ pub(super) fn fit_to_elements(
                 format!("use {}", what_auto(k))
             } else {
                 format!(
-                    "{} has no other formulation: mesh the part with hex8 and use \
-                     formulation = \"auto\" (hybrid or F-bar)",
+                    "{} has no other formulation: mesh the part with hex8 or tet10 \
+                     (Gmsh `SetOrder 2`, or element = \"tet10\" on a generated mesh) \
+                     and use formulation = \"auto\" (hybrid)",
                     k.name()
                 )
             };

@@ -162,23 +162,6 @@ pub(super) fn surfaces(
                 ),
             ));
         }
-        // Issue 35: tri6 faces carry no loads, walls or contact yet (their corner
-        // weights are zero or negative under node-to-surface); refuse, never guess.
-        if let Some(fr) = faces
-            .iter()
-            .find(|fr| mesh.kinds[fr.elem] == crate::mesh::ElemKind::Tet10)
-        {
-            return Err(err(
-                &f,
-                format!(
-                    "surface `{}` lies on tet10 elements (part `{}`): loads, walls and contact on tri6 faces are not supported yet",
-                    s.name,
-                    deck.parts
-                        .get(mesh.elem_part[fr.elem] as usize)
-                        .map_or("?", |p| p.name.as_str())
-                ),
-            ));
-        }
         surfaces.insert(s.name.clone(), faces);
     }
 

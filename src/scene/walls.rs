@@ -456,20 +456,6 @@ fn tracked_nodes(w: &WallDeck, f: &str, ctx: &Context) -> Result<(String, Vec<us
         }
     };
     let tracked: BTreeSet<usize> = nodes.iter().copied().collect();
-    // Issue 35: tributary areas of tri6 faces are not defined yet; refuse, never guess.
-    if let Some(e) = (0..ctx.mesh.n_elems()).find(|&e| {
-        ctx.mesh.kinds[e] == crate::mesh::ElemKind::Tet10
-            && ctx.mesh.elem_nodes(e).iter().any(|n| tracked.contains(n))
-    }) {
-        return Err(err(
-            f,
-            format!(
-                "wall `{}` tracks nodes of tet10 elements (part `{}`): walls on tri6 faces are not supported yet",
-                w.name,
-                ctx.part_names[ctx.mesh.elem_part[e] as usize]
-            ),
-        ));
-    }
     let area = tributary_areas(
         ctx.mesh,
         ctx.boundary.iter().filter(|fr| {

@@ -268,6 +268,8 @@ pub enum ElementDeck {
     #[default]
     Hex8,
     Tet4,
+    /// Tet4 cells with a node at the middle of every edge.
+    Tet10,
 }
 
 #[derive(Debug, Clone, Deserialize, Serialize)]
