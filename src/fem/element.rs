@@ -6,10 +6,10 @@
 
 use super::eas::Eas;
 pub use super::error::ElementError;
-use super::hybrid::{Hybrid, HybridTet10};
+use super::hybrid::{Hybrid, HYBRID_TET10, HYBRID_WEDGE6};
 use super::kernel::{ElementData, ElementKernel, ElementOutput};
 use super::reduced::Reduced;
-use super::shape::{HEX8, TET10, TET4};
+use super::shape::{HEX8, TET10, TET4, WEDGE6};
 use super::solid::{FBar, MeanDilatation, Standard};
 use crate::mesh::ElemKind;
 
@@ -106,8 +106,8 @@ pub fn applies(kind: ElemKind, form: Formulation) -> bool {
     match kind {
         ElemKind::Hex8 => true,
         ElemKind::Tet4 => form == Formulation::Standard,
-        // F-bar and hybrid are both the mean-dilatation tet10 ([`kernel`]).
-        ElemKind::Tet10 => matches!(
+        // F-bar and hybrid are the mean-dilatation element ([`kernel`]).
+        ElemKind::Tet10 | ElemKind::Wedge6 => matches!(
             form,
             Formulation::Standard | Formulation::FBar { .. } | Formulation::Hybrid { .. }
         ),
@@ -123,6 +123,12 @@ pub fn describe_for(kind: ElemKind, form: Formulation) -> String {
         }
         (ElemKind::Tet10, Formulation::Hybrid { .. }) => {
             "hybrid (P2/P0: mean dilatation with its pressure an unknown)".into()
+        }
+        (ElemKind::Wedge6, Formulation::FBar { .. }) => {
+            "mean dilatation (pressure condensed)".into()
+        }
+        (ElemKind::Wedge6, Formulation::Hybrid { .. }) => {
+            "hybrid (mean dilatation with its pressure an unknown)".into()
         }
         _ => form.describe(),
     }
@@ -149,10 +155,14 @@ pub fn kernel(kind: ElemKind, form: Formulation) -> Box<dyn ElementKernel> {
         // a tet10: `scene/` refuses them by part ([`applies`]); were one to arrive here it
         // would get the standard tet10, which does not lock in bending.
         (ElemKind::Tet10, Formulation::FBar { .. }) => Box::new(MeanDilatation { tab: &TET10 }),
-        (ElemKind::Tet10, Formulation::Hybrid { .. }) => Box::new(HybridTet10::default()),
+        (ElemKind::Tet10, Formulation::Hybrid { .. }) => Box::new(HYBRID_TET10),
         (ElemKind::Tet10, Formulation::Reduced { .. } | Formulation::Eas) => {
             Box::new(Standard { tab: &TET10 })
         }
+        // The wedge6 as the tet10 (P1 × P1 prism, 3 × 2 points).
+        (ElemKind::Wedge6, Formulation::FBar { .. }) => Box::new(MeanDilatation { tab: &WEDGE6 }),
+        (ElemKind::Wedge6, Formulation::Hybrid { .. }) => Box::new(HYBRID_WEDGE6),
+        (ElemKind::Wedge6, _) => Box::new(Standard { tab: &WEDGE6 }),
     }
 }
 
@@ -195,10 +205,12 @@ mod tests {
         ] {
             assert!(applies(ElemKind::Hex8, f));
             assert_eq!(applies(ElemKind::Tet4, f), f == Formulation::Standard);
-            assert_eq!(
-                applies(ElemKind::Tet10, f),
-                !matches!(f, Formulation::Reduced { .. } | Formulation::Eas)
-            );
+            for k in [ElemKind::Tet10, ElemKind::Wedge6] {
+                assert_eq!(
+                    applies(k, f),
+                    !matches!(f, Formulation::Reduced { .. } | Formulation::Eas)
+                );
+            }
             assert!(!f.describe().contains("hex8"), "{}", f.describe());
         }
         assert_eq!(
@@ -313,11 +325,24 @@ mod tests {
         Matrix3::new(1.25, 0.2, -0.1, 0.05, 0.9, 0.15, -0.08, 0.1, 1.1)
     }
 
-    fn cases() -> [(ElemKind, Vec<[f64; 3]>); 3] {
+    /// A prism with its top triangle shifted, twisted and tilted.
+    fn wedge() -> Vec<[f64; 3]> {
+        vec![
+            [0.0, 0.05, -0.02],
+            [1.1, -0.05, 0.1],
+            [0.05, 0.95, 0.0],
+            [0.1, 0.1, 0.9],
+            [1.0, 0.15, 1.1],
+            [0.2, 1.05, 1.0],
+        ]
+    }
+
+    fn cases() -> [(ElemKind, Vec<[f64; 3]>); 4] {
         [
             (ElemKind::Hex8, hex()),
             (ElemKind::Tet4, tet()),
             (ElemKind::Tet10, tet10()),
+            (ElemKind::Wedge6, wedge()),
         ]
     }
 

@@ -44,7 +44,7 @@ use super::kernel::{nodes, ElementData, ElementKernel, ElementOutput};
 use super::kinematics::{
     add_fbar_tangent, add_force, add_tangent, element_kinematics, LocalTangent,
 };
-use super::shape::{Tabulated, HEX8, TET10};
+use super::shape::{Tabulated, HEX8, TET10, WEDGE6};
 use super::solid::{FBar, MeanDilatation};
 use crate::material::{Kinematics, Material, StressPoint};
 
@@ -112,39 +112,46 @@ impl ElementKernel for Hybrid {
     }
 }
 
-/// The hybrid tet10: the mean-dilatation tet10 (P2/P0) with its constant pressure as an
-/// unknown, as the hybrid hex8 is F-bar's; condensed, it is [`MeanDilatation`]. The
-/// same answers, in the hybrid hex8's Newton iterations instead of F-bar's (the module
-/// documentation; Abaqus' C3D10H is the analogue with a linear pressure).
+/// The hybrid mean-dilatation element of any tabulated kind (tet10, wedge6): the
+/// mean-dilatation element (J̄ = v/V over the element, P2/P0 on a tet10) with its
+/// constant pressure as an unknown, as the hybrid hex8 is F-bar's; condensed, it is
+/// [`MeanDilatation`]. The same answers, in the hybrid hex8's Newton iterations instead
+/// of F-bar's (the module documentation; Abaqus' C3D10H is the tet10 analogue with a
+/// linear pressure).
 #[derive(Debug, Clone, Copy)]
-pub struct HybridTet10 {
-    md: MeanDilatation<10, 4>,
+pub struct HybridMd<const N: usize, const G: usize> {
+    md: MeanDilatation<N, G>,
 }
 
-impl Default for HybridTet10 {
-    fn default() -> Self {
+impl<const N: usize, const G: usize> HybridMd<N, G> {
+    pub const fn new(tab: &'static Tabulated<3, N, G>) -> Self {
         Self {
-            md: MeanDilatation { tab: &TET10 },
+            md: MeanDilatation { tab },
         }
     }
 }
 
-impl ElementKernel for HybridTet10 {
+/// The hybrid tet10.
+pub const HYBRID_TET10: HybridMd<10, 4> = HybridMd::new(&TET10);
+/// The hybrid wedge6.
+pub const HYBRID_WEDGE6: HybridMd<6, 6> = HybridMd::new(&WEDGE6);
+
+impl<const N: usize, const G: usize> ElementKernel for HybridMd<N, G> {
     fn n_nodes(&self) -> usize {
-        10
+        N
     }
     fn n_points(&self) -> usize {
-        4
+        G
     }
     fn own_blocks(&self) -> usize {
         1
     }
     fn force(&self, e: &ElementData, out: ElementOutput) -> Result<(), ElementError> {
         let pi: &[f64; 3] = e.own.try_into().expect("one pressure block");
-        force(&TET10, e, pi, 0.0, out)
+        force(self.md.tab, e, pi, 0.0, out)
     }
     fn stress(&self, e: &ElementData) -> Result<[f64; 6], ElementError> {
-        stress(&TET10, e, e.own[0])
+        stress(self.md.tab, e, e.own[0])
     }
     fn condensed(&self) -> Option<&dyn ElementKernel> {
         Some(&self.md)
@@ -466,7 +473,7 @@ mod tests {
                 std::array::from_fn(|k| y[k] - x[k] + 0.02 * ((3 * a + k) as f64).cos())
             })
             .collect();
-        let kern = HybridTet10::default();
+        let kern = HYBRID_TET10;
         let n = 33;
         let run = |u: &[[f64; 3]], pi: &[f64; 3], mat: &dyn Material, with_k: bool| {
             let ns = 4 * mat.n_state();

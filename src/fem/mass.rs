@@ -11,7 +11,7 @@
 use super::element::{element_force, ElementError, Formulation};
 use super::kernel::{ElementData, ElementOutput};
 use super::kinematics::reference_gradients;
-use super::shape::{tet10_dn, tet10_n, HEX8, TET4};
+use super::shape::{tet10_dn, tet10_n, HEX8, TET4, WEDGE6};
 use crate::material::Material;
 use crate::mesh::ElemKind;
 
@@ -40,6 +40,23 @@ pub fn consistent_mass(kind: ElemKind, x0: &[[f64; 3]], rho: f64, m: &mut [f64])
         }
         ElemKind::Tet10 => {
             tet10_consistent_mass(x0.try_into().expect("tet10 has 10 nodes"), rho, m)
+        }
+        // The 3 × 2 rule: exact for a right prism (det J₀ constant, N_a N_b quadratic in
+        // (ξ, η) and in ζ).
+        ElemKind::Wedge6 => {
+            let x: &[[f64; 3]; 6] = x0.try_into().expect("wedge6 has 6 nodes");
+            assert_eq!(m.len(), 36);
+            m.fill(0.0);
+            for g in 0..6 {
+                let det = reference_gradients(x, &WEDGE6.dn[g]).1;
+                let w = rho * WEDGE6.weights[g] * det;
+                let n = &WEDGE6.n[g];
+                for a in 0..6 {
+                    for b in 0..6 {
+                        m[6 * a + b] += w * n[a] * n[b];
+                    }
+                }
+            }
         }
         ElemKind::Tet4 => {
             let x: &[[f64; 3]; 4] = x0.try_into().expect("tet4 has 4 nodes");

@@ -5,7 +5,9 @@
 use super::error::{At, ElementError};
 use super::kernel::nodes;
 use super::kinematics::reference_gradients;
-use super::shape::{hex8_dn, tet10_dn, Tabulated, HEX8, HEX8_NODES, TET10, TET4};
+use super::shape::{
+    hex8_dn, tet10_dn, wedge6_dn, Tabulated, HEX8, HEX8_NODES, TET10, TET4, WEDGE6,
+};
 use crate::mesh::ElemKind;
 
 /// Reference-configuration check: `Err` with a short reason if det J ≤ 0, or tiny
@@ -69,6 +71,26 @@ pub fn check_reference(kind: ElemKind, x0: &[[f64; 3]]) -> Result<(), ElementErr
             }
             Ok(())
         }
+        // Gauss points, then corners (reference volume 1).
+        ElemKind::Wedge6 => {
+            let x0: &[[f64; 3]; 6] = nodes(x0);
+            for g in 0..6 {
+                check(reference_gradients(x0, &WEDGE6.dn[g]).1, At::Gauss(g), 1.0)?;
+            }
+            const CORNERS: [[f64; 3]; 6] = [
+                [0.0, 0.0, -1.0],
+                [1.0, 0.0, -1.0],
+                [0.0, 1.0, -1.0],
+                [0.0, 0.0, 1.0],
+                [1.0, 0.0, 1.0],
+                [0.0, 1.0, 1.0],
+            ];
+            for (c, xi) in CORNERS.iter().enumerate() {
+                let dn = wedge6_dn(*xi);
+                check(reference_gradients(x0, &dn).1, At::Corner(c), 1.0)?;
+            }
+            Ok(())
+        }
     }
 }
 
@@ -84,6 +106,7 @@ pub fn element_volume(kind: ElemKind, x0: &[[f64; 3]]) -> f64 {
         ElemKind::Hex8 => vol(&HEX8, nodes(x0)),
         ElemKind::Tet4 => vol(&TET4, nodes(x0)),
         ElemKind::Tet10 => vol(&TET10, nodes(x0)),
+        ElemKind::Wedge6 => vol(&WEDGE6, nodes(x0)),
     }
 }
 

@@ -161,6 +161,29 @@ pub const fn tri3_dn(_xi: [f64; 2]) -> [[f64; 2]; 3] {
     [[-1.0, -1.0], [1.0, 0.0], [0.0, 1.0]]
 }
 
+/// Wedge6 (prism) shape functions: triangle (ξ, η) × ζ ∈ [−1, 1]; nodes 0-1-2 the
+/// bottom triangle (ζ = −1, counter-clockwise seen from the top), 3-4-5 above them
+/// (Gmsh's order): N = L_i (1 ∓ ζ)/2 with L = (1 − ξ − η, ξ, η).
+pub const fn wedge6_n(xi: [f64; 3]) -> [f64; 6] {
+    let l = [1.0 - xi[0] - xi[1], xi[0], xi[1]];
+    let (b, t) = (0.5 * (1.0 - xi[2]), 0.5 * (1.0 + xi[2]));
+    [l[0] * b, l[1] * b, l[2] * b, l[0] * t, l[1] * t, l[2] * t]
+}
+
+/// ∂N_a/∂ξ of the wedge6.
+pub const fn wedge6_dn(xi: [f64; 3]) -> [[f64; 3]; 6] {
+    let l = [1.0 - xi[0] - xi[1], xi[0], xi[1]];
+    let (b, t) = (0.5 * (1.0 - xi[2]), 0.5 * (1.0 + xi[2]));
+    [
+        [-b, -b, -0.5 * l[0]],
+        [b, 0.0, -0.5 * l[1]],
+        [0.0, b, -0.5 * l[2]],
+        [-t, -t, 0.5 * l[0]],
+        [t, 0.0, 0.5 * l[1]],
+        [0.0, t, 0.5 * l[2]],
+    ]
+}
+
 /// Quadratic tri6 shape functions: corners (0,0), (1,0), (0,1), then the midside nodes
 /// of edges 0-1, 1-2, 2-0 (Gmsh's order, the tet10's face order): N = L(2L − 1) at a
 /// corner, 4 L_i L_j at a midside node, with L = (1 − ξ − η, ξ, η).
@@ -265,6 +288,32 @@ const fn tri3_table() -> Tabulated<2, 3, 3> {
     t
 }
 
+const fn wedge6_table() -> Tabulated<3, 6, 6> {
+    // The tri3's 3-point rule (degree 2) times 2-point Gauss in ζ (degree 3): exact for
+    // the volume and the stiffness of a prism with parallel triangles.
+    let tri = [
+        [1.0 / 6.0, 1.0 / 6.0],
+        [2.0 / 3.0, 1.0 / 6.0],
+        [1.0 / 6.0, 2.0 / 3.0],
+    ];
+    let mut t = Tabulated {
+        points: [[0.0; 3]; 6],
+        weights: [1.0 / 6.0; 6],
+        n: [[0.0; 6]; 6],
+        dn: [[[0.0; 3]; 6]; 6],
+    };
+    let mut g = 0;
+    while g < 6 {
+        let z = if g < 3 { -GAUSS2 } else { GAUSS2 };
+        let p = [tri[g % 3][0], tri[g % 3][1], z];
+        t.points[g] = p;
+        t.n[g] = wedge6_n(p);
+        t.dn[g] = wedge6_dn(p);
+        g += 1;
+    }
+    t
+}
+
 const fn tri6_table() -> Tabulated<2, 6, 6> {
     // Dunavant's 6-point rule of degree 4 (Strang–Fix): barycentric (a, b, b) with
     // a = 0.108103018168070, b = 0.445948490915965, weight 0.223381589678011, and
@@ -331,6 +380,8 @@ pub const TET4: Tabulated<3, 4, 1> = Tabulated {
 };
 /// Quad4 face with the 2×2 Gauss rule (exact for the area vector x,ξ × x,η).
 pub const QUAD4: Tabulated<2, 4, 4> = quad4_table();
+/// Wedge6 with the 3 × 2 rule (reference volume 1).
+pub const WEDGE6: Tabulated<3, 6, 6> = wedge6_table();
 /// Tri6 face with the 6-point degree-4 rule: N_a (degree 2) times the area vector of a
 /// curved face (degree 2) is exact; a flat face needs degree 2 only.
 pub const TRI6: Tabulated<2, 6, 6> = tri6_table();

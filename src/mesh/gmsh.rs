@@ -119,6 +119,7 @@ fn elem_type(t: u64) -> Option<(usize, usize)> {
         3 => Some((2, 4)),
         4 => Some((3, 4)),
         5 => Some((3, 8)),
+        6 => Some((3, 6)),
         8 => Some((1, 3)),
         9 => Some((2, 6)),
         11 => Some((3, 10)),
@@ -392,7 +393,7 @@ fn elements(
                 _ => ("an element block has".to_string(), type_line),
             };
             return Err(format!(
-                "line {line}: {what} {}, which alfe does not read; use first-order hex8 or tet4 volumes, or quad4 sheets (Mesh.ElementOrder = 1)",
+                "line {line}: {what} {}, which alfe does not read; use hex8, tet4, tet10 (Mesh.ElementOrder = 2) or wedge6 volumes, or quad4 sheets",
                 elem_type_name(ty)
             ));
         };
@@ -471,6 +472,7 @@ pub fn read_msh(text: &str, part: u32) -> Result<Mesh, String> {
         let kind = match re.nn {
             8 => ElemKind::Hex8,
             10 => ElemKind::Tet10,
+            6 => ElemKind::Wedge6,
             _ => ElemKind::Tet4,
         };
         mesh.push_elem(kind, raw.nodes(re), part);
@@ -497,7 +499,7 @@ pub fn read_msh(text: &str, part: u32) -> Result<Mesh, String> {
         } else {
             ""
         };
-        return Err(format!("mesh file has no hex8, tet4 or tet10 volume elements; add a physical volume or set Mesh.SaveAll = 1{hint}"));
+        return Err(format!("mesh file has no hex8, tet4, tet10 or wedge6 volume elements; add a physical volume or set Mesh.SaveAll = 1{hint}"));
     }
 
     let grouped: Vec<&RawElem> = raw
@@ -531,7 +533,7 @@ pub fn read_msh(text: &str, part: u32) -> Result<Mesh, String> {
                 key.sort_unstable();
                 let Some(&f) = faces.get(&key) else {
                     return Err(format!(
-                        "line {}: element {} of physical surface \"{name}\" is not a face of any hex8, tet4 or tet10 element",
+                        "line {}: element {} of physical surface \"{name}\" is not a face of any hex8, tet4, tet10 or wedge6 element",
                         re.line, re.tag
                     ));
                 };
@@ -852,8 +854,8 @@ $EndElements
             e.contains("element 4 has type 12 (hex27), which alfe does not read"),
             "{e}"
         );
-        let e = err(&HEXES.replace("3 1 5 2", "3 1 6 2"));
-        assert!(e.contains("type 6 (prism6)"), "{e}");
+        let e = err(&HEXES.replace("3 1 5 2", "3 1 7 2"));
+        assert!(e.contains("type 7 (pyramid5)"), "{e}");
         let e = err(&HEXES.replace("3 13 22 25 16", "3 13 22 40 16"));
         assert!(
             e.contains("element 3 of physical surface \"bottom face\" is not a face"),

@@ -1,4 +1,4 @@
-//! Meshes: nodes, elements (hex8, tet4, tet10), named node sets and faces, generators and readers.
+//! Meshes: nodes, elements (hex8, tet4, tet10, wedge6), named node sets and faces, generators and readers.
 //!
 //! A [`Mesh`] is the serial, whole-model mesh that rank 0 builds or reads before it
 //! partitions; ranks receive their pieces through `partition::distribute`.
@@ -21,6 +21,8 @@ pub enum ElemKind {
     Hex8,
     Tet4,
     Tet10,
+    /// Prism: triangle 0-1-2 (counter-clockwise seen from 3-4-5), 3-4-5 above it.
+    Wedge6,
 }
 
 /// Most nodes of any element kind (the tet10): fixed-size gather buffers.
@@ -32,6 +34,7 @@ impl ElemKind {
             ElemKind::Hex8 => 8,
             ElemKind::Tet4 => 4,
             ElemKind::Tet10 => 10,
+            ElemKind::Wedge6 => 6,
         }
     }
     /// Local node indices of each face, ordered so the normal (right-hand rule) points
@@ -55,6 +58,14 @@ impl ElemKind {
                 &[1, 2, 3, 5, 8, 9],
                 &[0, 3, 2, 7, 8, 6],
             ],
+            // Two triangles, then the three quads (Gmsh's prism face order).
+            ElemKind::Wedge6 => &[
+                &[0, 2, 1],
+                &[3, 4, 5],
+                &[0, 1, 4, 3],
+                &[1, 2, 5, 4],
+                &[2, 0, 3, 5],
+            ],
         }
     }
     pub fn name(self) -> &'static str {
@@ -62,6 +73,7 @@ impl ElemKind {
             ElemKind::Hex8 => "hex8",
             ElemKind::Tet4 => "tet4",
             ElemKind::Tet10 => "tet10",
+            ElemKind::Wedge6 => "wedge6",
         }
     }
     /// The corner nodes of a face (its first 3 or 4 local nodes): what a flat face is.
@@ -189,6 +201,14 @@ impl Mesh {
             ElemKind::Tet4 | ElemKind::Tet10 => {
                 let p = |i: usize| Vector3::from(x[i]);
                 (p(1) - p(0)).cross(&(p(2) - p(0))).dot(&(p(3) - p(0))) / 6.0
+            }
+            // Three tets (exact for planar quad faces).
+            ElemKind::Wedge6 => {
+                let p = |i: usize| Vector3::from(x[i]);
+                let tet = |a: usize, b: usize, c: usize, d: usize| {
+                    (p(b) - p(a)).cross(&(p(c) - p(a))).dot(&(p(d) - p(a))) / 6.0
+                };
+                tet(0, 1, 2, 3) + tet(1, 2, 3, 4) + tet(2, 3, 4, 5)
             }
             ElemKind::Hex8 => {
                 const S: [f64; 8] = [-1.0, 1.0, 1.0, -1.0, -1.0, 1.0, 1.0, -1.0];

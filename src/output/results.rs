@@ -250,13 +250,14 @@ fn write_mesh(comm: &dyn Comm, h5: &H5File, model: &Model) -> Result<(XdmfTopolo
 fn write_connectivity(comm: &dyn Comm, h5: &H5File, model: &Model) -> Result<XdmfTopology> {
     let l = &model.mesh;
     let el = &model.solids.elements;
-    // Which kinds are present anywhere: hex8, tet4, tet10.
-    let mut kinds = [0.0, 0.0, 0.0];
+    // Which kinds are present anywhere: hex8, tet4, tet10, wedge6.
+    let mut kinds = [0.0; 4];
     for k in &el.kinds {
         kinds[match k {
             ElemKind::Hex8 => 0,
             ElemKind::Tet4 => 1,
             ElemKind::Tet10 => 2,
+            ElemKind::Wedge6 => 3,
         }] = 1.0;
     }
     comm.allreduce_max(&mut kinds);
@@ -266,16 +267,20 @@ fn write_connectivity(comm: &dyn Comm, h5: &H5File, model: &Model) -> Result<Xdm
         let g = |a: usize| l.global_node(en[a]) as i64;
         match el.kinds[e] {
             ElemKind::Tet10 => [0, 1, 2, 3, 4, 5, 6, 7, 9, 8].map(g).to_vec(),
+            // VTK's wedge: the first triangle's normal points away from the second.
+            ElemKind::Wedge6 => [0, 2, 1, 3, 5, 4].map(g).to_vec(),
             _ => (0..en.len()).map(g).collect(),
         }
     };
-    if kinds.iter().filter(|&&k| k > 0.0).count() > 1 {
+    // Wedges go out as a mixed array (no uniform wedge topology here).
+    if kinds.iter().filter(|&&k| k > 0.0).count() > 1 || kinds[3] > 0.0 {
         let mut mixed = Vec::new();
         for e in 0..el.len() {
             mixed.push(match el.kinds[e] {
                 ElemKind::Hex8 => 9,
                 ElemKind::Tet4 => 6,
                 ElemKind::Tet10 => super::xdmf::XDMF_TETRAHEDRON_10,
+                ElemKind::Wedge6 => 8,
             });
             mixed.extend(out_nodes(e));
         }

@@ -231,6 +231,7 @@ fn box_part(m: &MeshDeck, f: &str, part: u32) -> Result<Mesh> {
     let kind = match element {
         ElementDeck::Hex8 => ElemKind::Hex8,
         ElementDeck::Tet4 | ElementDeck::Tet10 => ElemKind::Tet4,
+        ElementDeck::Wedge6 => ElemKind::Wedge6,
     };
     let spec = BoxSpec {
         origin: *origin,
@@ -296,6 +297,7 @@ fn extruded_quad_part(m: &MeshDeck, f: &str, part: u32) -> Result<Mesh> {
     let kind = match element {
         ElementDeck::Hex8 => ElemKind::Hex8,
         ElementDeck::Tet4 | ElementDeck::Tet10 => ElemKind::Tet4,
+        ElementDeck::Wedge6 => ElemKind::Wedge6,
     };
     let spec = BoxSpec {
         origin: [0.0, 0.0, *z0],
@@ -521,7 +523,10 @@ fn gmsh_part(m: &MeshDeck, f: &str, part: u32, deck_dir: &Path) -> Result<Mesh> 
     if mesh.n_elems() == 0 {
         return Err(err(
             format!("{f}.mesh.file"),
-            format!("`{}` has no hex8 or tet4 elements", path.display()),
+            format!(
+                "`{}` has no hex8, tet4, tet10 or wedge6 elements",
+                path.display()
+            ),
         ));
     }
     Ok(mesh)
