@@ -502,6 +502,48 @@ fn hybrid_elements_with_amg_on_two_ranks() {
     assert_eq!(s["preconditioner"], "amg", "{s}");
 }
 
+/// Hybrid tet10 (Cook's membrane as generated tet10, ν = 0.4999): pressure blocks of
+/// quadratic elements on both ranks; the 2-rank (ASM, inexact Newton) answers are the
+/// 1-rank (direct) ones.
+#[test]
+fn hybrid_tet10_same_on_one_and_two_ranks() {
+    let dir = temp_dir("rank-tet10");
+    let deck = edit(
+        &builtin("cook-membrane"),
+        "cells = [24, 24, 4] }",
+        "cells = [6, 6, 1], element = \"tet10\" }",
+    );
+    std::fs::write(dir.join("cook.toml"), deck).unwrap();
+    let runs = same_on_one_and_two(&dir, Ranks::deck("cook.toml", "cook-membrane").within(1e-6));
+    let s = read_json(&runs.two.join("summary.json"));
+    assert_eq!(s["converged"], true, "{s}");
+}
+
+/// The seal of issue 35 (`tests/seal.toml`) as coarse tet10, pressed and sliding: a wall
+/// with friction on tri6 faces and hybrid tet10 pressures on both ranks give the 1-rank
+/// answers.
+#[test]
+fn tet10_seal_with_a_frictional_wall_same_on_one_and_two_ranks() {
+    let dir = temp_dir("rank-tet10-seal");
+    let text =
+        std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/tests/seal.toml")).unwrap();
+    let deck = edit(
+        &edit(
+            &edit(
+                &text,
+                "cells = [16, 8, 8], element = \"hex8\"",
+                "cells = [4, 2, 2], element = \"tet10\"",
+            ),
+            "end_time = 2.0",
+            "end_time = 1.4",
+        ),
+        "step = 0.1",
+        "step = 0.2",
+    );
+    std::fs::write(dir.join("seal.toml"), deck).unwrap();
+    same_on_one_and_two(&dir, Ranks::deck("seal.toml", "seal").within(1e-6));
+}
+
 /// GMRES + block Jacobi on 2 ranks, ≥ 50k unknowns, to the asked tolerance on the
 /// true residual ‖b − Ax‖/‖b‖ recomputed after the solve.
 #[test]

@@ -317,3 +317,37 @@ fn a_sheet_takes_eas_by_default_and_bends_as_beam_theory_says() {
         assert!(s.contains("use formulation = \"auto\" or \"eas\""), "{s}");
     }
 }
+
+/// Quadratic tets and prisms under `auto` at ν = 0.4995 are hybrid (mean dilatation with
+/// a pressure unknown) and quiet; `standard` warns; `eas` is refused naming the part.
+#[test]
+fn tet10_and_wedge6_parts_get_and_print_their_formulations() {
+    let dir = temp_dir("quadratic-check");
+    let s = check(&dir, &block("tet10", 0.4995, None)).unwrap();
+    assert!(
+        s.contains(
+            "\n    block: 96 tet10, hybrid (P2/P0: mean dilatation with its pressure an unknown)\n"
+        ),
+        "{s}"
+    );
+    assert!(!s.contains("warning"), "{s}");
+    let s = check(&dir, &block("wedge6", 0.4995, None)).unwrap();
+    assert!(
+        s.contains(
+            "\n    block: 32 wedge6, hybrid (mean dilatation with its pressure an unknown)\n"
+        ),
+        "{s}"
+    );
+    let s = check(&dir, &block("wedge6", 0.4995, Some("standard"))).unwrap();
+    assert!(
+        s.contains("32 wedge6 with the standard formulation lock at nu = 0.4995 > 0.45"),
+        "{s}"
+    );
+    let e = check(&dir, &block("tet10", 0.3, Some("eas")))
+        .expect_err("eas on tet10")
+        .to_string();
+    assert!(
+        e.contains("parts[0].formulation: \"eas\" does not apply to tet10 elements (part `block`"),
+        "{e}"
+    );
+}

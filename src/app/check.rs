@@ -41,11 +41,11 @@ fn describe(def: &ModelDef, run: &RunSettings) -> String {
         .iter()
         .map(|c| c.kind().extra_unknowns())
         .sum();
-    // A hybrid hex8's pressure takes a block of three unknowns (one used).
+    // A hybrid element's pressure takes a block of three unknowns (one used).
     let hybrid = (0..m.n_elems())
         .filter(|&e| {
-            m.kinds[e] == crate::mesh::ElemKind::Hex8
-                && def.part_formulation[m.elem_part[e] as usize].is_hybrid()
+            let form = def.part_formulation[m.elem_part[e] as usize];
+            form.is_hybrid() && crate::fem::element::kernel(m.kinds[e], form).own_blocks() > 0
         })
         .count();
     let mut parts_of = Vec::new();

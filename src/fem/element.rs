@@ -6,11 +6,11 @@
 
 use super::eas::Eas;
 pub use super::error::ElementError;
-use super::hybrid::Hybrid;
+use super::hybrid::{Hybrid, HYBRID_TET10, HYBRID_WEDGE6};
 use super::kernel::{ElementData, ElementKernel, ElementOutput};
 use super::reduced::Reduced;
-use super::shape::{HEX8, TET4};
-use super::solid::{FBar, Standard};
+use super::shape::{HEX8, TET10, TET4, WEDGE6};
+use super::solid::{FBar, MeanDilatation, Standard};
 use crate::mesh::ElemKind;
 
 /// How the element treats volume change.
@@ -106,6 +106,31 @@ pub fn applies(kind: ElemKind, form: Formulation) -> bool {
     match kind {
         ElemKind::Hex8 => true,
         ElemKind::Tet4 => form == Formulation::Standard,
+        // F-bar and hybrid are the mean-dilatation element ([`kernel`]).
+        ElemKind::Tet10 | ElemKind::Wedge6 => matches!(
+            form,
+            Formulation::Standard | Formulation::FBar { .. } | Formulation::Hybrid { .. }
+        ),
+    }
+}
+
+/// [`Formulation::describe`] as an element of `kind` gets it: F-bar and hybrid tet10 are
+/// the mean-dilatation element, its pressure condensed or an unknown.
+pub fn describe_for(kind: ElemKind, form: Formulation) -> String {
+    match (kind, form) {
+        (ElemKind::Tet10, Formulation::FBar { .. }) => {
+            "mean dilatation (P2/P0, pressure condensed)".into()
+        }
+        (ElemKind::Tet10, Formulation::Hybrid { .. }) => {
+            "hybrid (P2/P0: mean dilatation with its pressure an unknown)".into()
+        }
+        (ElemKind::Wedge6, Formulation::FBar { .. }) => {
+            "mean dilatation (pressure condensed)".into()
+        }
+        (ElemKind::Wedge6, Formulation::Hybrid { .. }) => {
+            "hybrid (mean dilatation with its pressure an unknown)".into()
+        }
+        _ => form.describe(),
     }
 }
 
@@ -123,6 +148,21 @@ pub fn kernel(kind: ElemKind, form: Formulation) -> Box<dyn ElementKernel> {
         (ElemKind::Hex8, Formulation::Eas) => Box::new(Eas),
         (ElemKind::Hex8, Formulation::Hybrid { hourglass }) => Box::new(Hybrid::new(hourglass)),
         (ElemKind::Tet4, _) => Box::new(Standard { tab: &TET4 }),
+        (ElemKind::Tet10, Formulation::Standard) => Box::new(Standard { tab: &TET10 }),
+        // Issue 35, tet10: F-bar parts get the mean-dilatation tet10 (J̄ = v/V, P2/P0
+        // with the constant pressure condensed), hybrid parts the same element with its
+        // pressure an unknown (the hybrid hex8's Newton). Reduced and EAS do not apply to
+        // a tet10: `scene/` refuses them by part ([`applies`]); were one to arrive here it
+        // would get the standard tet10, which does not lock in bending.
+        (ElemKind::Tet10, Formulation::FBar { .. }) => Box::new(MeanDilatation { tab: &TET10 }),
+        (ElemKind::Tet10, Formulation::Hybrid { .. }) => Box::new(HYBRID_TET10),
+        (ElemKind::Tet10, Formulation::Reduced { .. } | Formulation::Eas) => {
+            Box::new(Standard { tab: &TET10 })
+        }
+        // The wedge6 as the tet10 (P1 × P1 prism, 3 × 2 points).
+        (ElemKind::Wedge6, Formulation::FBar { .. }) => Box::new(MeanDilatation { tab: &WEDGE6 }),
+        (ElemKind::Wedge6, Formulation::Hybrid { .. }) => Box::new(HYBRID_WEDGE6),
+        (ElemKind::Wedge6, _) => Box::new(Standard { tab: &WEDGE6 }),
     }
 }
 
@@ -165,6 +205,12 @@ mod tests {
         ] {
             assert!(applies(ElemKind::Hex8, f));
             assert_eq!(applies(ElemKind::Tet4, f), f == Formulation::Standard);
+            for k in [ElemKind::Tet10, ElemKind::Wedge6] {
+                assert_eq!(
+                    applies(k, f),
+                    !matches!(f, Formulation::Reduced { .. } | Formulation::Eas)
+                );
+            }
             assert!(!f.describe().contains("hex8"), "{}", f.describe());
         }
         assert_eq!(
@@ -210,6 +256,18 @@ mod tests {
             [0.2, 0.9, 0.15],
             [0.1, 0.3, 1.1],
         ]
+    }
+
+    /// The tet above with its midside nodes moved off their edges by up to ~0.04:
+    /// curved edges, a distorted quadratic element.
+    fn tet10() -> Vec<[f64; 3]> {
+        let c = tet();
+        let mut x = c.clone();
+        for (e, [i, j]) in crate::fem::shape::TET10_EDGES.iter().enumerate() {
+            let s = |k: usize| 0.04 * (((5 * e + 2 * k) as f64) * 1.7).sin();
+            x.push(std::array::from_fn(|k| 0.5 * (c[*i][k] + c[*j][k]) + s(k)));
+        }
+        x
     }
 
     fn mats() -> [Box<dyn Material>; 2] {
@@ -267,8 +325,73 @@ mod tests {
         Matrix3::new(1.25, 0.2, -0.1, 0.05, 0.9, 0.15, -0.08, 0.1, 1.1)
     }
 
-    fn cases() -> [(ElemKind, Vec<[f64; 3]>); 2] {
-        [(ElemKind::Hex8, hex()), (ElemKind::Tet4, tet())]
+    /// A prism with its top triangle shifted, twisted and tilted.
+    fn wedge() -> Vec<[f64; 3]> {
+        vec![
+            [0.0, 0.05, -0.02],
+            [1.1, -0.05, 0.1],
+            [0.05, 0.95, 0.0],
+            [0.1, 0.1, 0.9],
+            [1.0, 0.15, 1.1],
+            [0.2, 1.05, 1.0],
+        ]
+    }
+
+    fn cases() -> [(ElemKind, Vec<[f64; 3]>); 4] {
+        [
+            (ElemKind::Hex8, hex()),
+            (ElemKind::Tet4, tet()),
+            (ElemKind::Tet10, tet10()),
+            (ElemKind::Wedge6, wedge()),
+        ]
+    }
+
+    /// Tet10: a straight-sided one has the tet4's volume; the distorted one passes the
+    /// reference check; a midside node pulled across the opposite face fails it.
+    #[test]
+    fn tet10_volume_and_reference_check() {
+        let c = tet();
+        let mut straight = c.clone();
+        for [i, j] in crate::fem::shape::TET10_EDGES {
+            straight.push(std::array::from_fn(|k| 0.5 * (c[i][k] + c[j][k])));
+        }
+        let v4 = element_volume(ElemKind::Tet4, &c);
+        assert!((element_volume(ElemKind::Tet10, &straight) - v4).abs() < 1e-14);
+        assert!(check_reference(ElemKind::Tet10, &tet10()).is_ok());
+        let mut bad = tet10();
+        // The midside node of edge 0-1 beyond corner 1: the edge folds back at corner 1.
+        bad[4] = std::array::from_fn(|k| 2.0 * c[1][k] - c[0][k]);
+        assert!(check_reference(ElemKind::Tet10, &bad).is_err());
+    }
+
+    /// The mean-dilatation tet10 (F-bar and hybrid parts) does not lock where the
+    /// standard one stiffens: a quadratic bending field on a nearly incompressible
+    /// material, on a straight-sided element (its centroid is the corners' mean, so the
+    /// field's mean dilatation is zero).
+    #[test]
+    fn mean_dilatation_tet10_relieves_locking() {
+        let c = tet();
+        let mut x0 = c.clone();
+        for [i, j] in crate::fem::shape::TET10_EDGES {
+            x0.push(std::array::from_fn(|k| 0.5 * (c[i][k] + c[j][k])));
+        }
+        let zc = (0..4).map(|a| x0[a][2]).sum::<f64>() / 4.0;
+        let u: Vec<[f64; 3]> = x0
+            .iter()
+            .map(|x| [1e-3 * (x[2] - zc) * x[0], 0.0, -0.5e-3 * x[0] * x[0]])
+            .collect();
+        let energy = |form, nu| {
+            let mat = LinearElastic::new(1.0, nu, 1.0);
+            let (f, _) = force_with(ElemKind::Tet10, form, &x0, &u, &mat, false);
+            f.iter()
+                .zip(u.iter().flatten())
+                .map(|(a, b)| a * b)
+                .sum::<f64>()
+        };
+        let s = energy(Formulation::Standard, 0.4999) / energy(Formulation::Standard, 0.3);
+        let b = energy(Formulation::FBAR, 0.4999) / energy(Formulation::FBAR, 0.3);
+        eprintln!("tet10 energy ratio ν 0.4999 / 0.3: standard {s:.3}, mean dilatation {b:.3}");
+        assert!(b < 2.0 && s > 10.0 * b, "standard {s}, mean dilatation {b}");
     }
 
     #[test]

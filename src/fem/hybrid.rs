@@ -44,21 +44,21 @@ use super::kernel::{nodes, ElementData, ElementKernel, ElementOutput};
 use super::kinematics::{
     add_fbar_tangent, add_force, add_tangent, element_kinematics, LocalTangent,
 };
-use super::shape::HEX8;
-use super::solid::FBar;
+use super::shape::{Tabulated, HEX8, TET10, WEDGE6};
+use super::solid::{FBar, MeanDilatation};
 use crate::material::{Kinematics, Material, StressPoint};
 
-/// Rows of a hybrid element: 8 nodes and the pressure block.
+/// Rows of a hybrid hex8: 8 nodes and the pressure block.
 pub const DOFS: usize = 27;
 
 /// What the pressure rows need from the element loop.
-struct Volumes {
+struct Volumes<const N: usize> {
     /// Reference volume and J̄.
     big_v: f64,
     jbar: f64,
     /// b_a = ∂v/∂u_a, and the pressure column b̂_a = J̄ ∫ ∇ₓN_a dV.
-    b: [[f64; 3]; 8],
-    bhat: [[f64; 3]; 8],
+    b: [[f64; 3]; N],
+    bhat: [[f64; 3]; N],
     /// U'(J̄), U''(J̄), K₀ = U''(1).
     u1: f64,
     u2: f64,
@@ -102,13 +102,59 @@ impl ElementKernel for Hybrid {
     }
     fn force(&self, e: &ElementData, out: ElementOutput) -> Result<(), ElementError> {
         let pi: &[f64; 3] = e.own.try_into().expect("one pressure block");
-        force(e, pi, self.fbar.hourglass, out)
+        force(&HEX8, e, pi, self.fbar.hourglass, out)
     }
     fn stress(&self, e: &ElementData) -> Result<[f64; 6], ElementError> {
-        stress(e, e.own[0])
+        stress(&HEX8, e, e.own[0])
     }
     fn condensed(&self) -> Option<&dyn ElementKernel> {
         Some(&self.fbar)
+    }
+}
+
+/// The hybrid mean-dilatation element of any tabulated kind (tet10, wedge6): the
+/// mean-dilatation element (J̄ = v/V over the element, P2/P0 on a tet10) with its
+/// constant pressure as an unknown, as the hybrid hex8 is F-bar's; condensed, it is
+/// [`MeanDilatation`]. The same answers, in the hybrid hex8's Newton iterations instead
+/// of F-bar's (the module documentation; Abaqus' C3D10H is the tet10 analogue with a
+/// linear pressure).
+#[derive(Debug, Clone, Copy)]
+pub struct HybridMd<const N: usize, const G: usize> {
+    md: MeanDilatation<N, G>,
+}
+
+impl<const N: usize, const G: usize> HybridMd<N, G> {
+    pub const fn new(tab: &'static Tabulated<3, N, G>) -> Self {
+        Self {
+            md: MeanDilatation { tab },
+        }
+    }
+}
+
+/// The hybrid tet10.
+pub const HYBRID_TET10: HybridMd<10, 4> = HybridMd::new(&TET10);
+/// The hybrid wedge6.
+pub const HYBRID_WEDGE6: HybridMd<6, 6> = HybridMd::new(&WEDGE6);
+
+impl<const N: usize, const G: usize> ElementKernel for HybridMd<N, G> {
+    fn n_nodes(&self) -> usize {
+        N
+    }
+    fn n_points(&self) -> usize {
+        G
+    }
+    fn own_blocks(&self) -> usize {
+        1
+    }
+    fn force(&self, e: &ElementData, out: ElementOutput) -> Result<(), ElementError> {
+        let pi: &[f64; 3] = e.own.try_into().expect("one pressure block");
+        force(self.md.tab, e, pi, 0.0, out)
+    }
+    fn stress(&self, e: &ElementData) -> Result<[f64; 6], ElementError> {
+        stress(self.md.tab, e, e.own[0])
+    }
+    fn condensed(&self) -> Option<&dyn ElementKernel> {
+        Some(&self.md)
     }
 }
 
@@ -117,34 +163,35 @@ pub fn pressure_scale(mat: &dyn Material, reference_volume: f64) -> f64 {
     mat.shear_modulus() / reference_volume.cbrt()
 }
 
-/// The displacement rows `f` (24) and, with `k`, their tangent for the pressure
+/// The displacement rows `f` (3N) and, with `k`, their tangent for the pressure
 /// p = s `pi` held fixed (s from the reference volume the kinematics integrate).
-fn core(
+fn core<const N: usize, const G: usize>(
+    tab: &Tabulated<3, N, G>,
     e: &ElementData,
     pi: f64,
     state_new: &mut [f64],
     f: &mut [f64],
-    mut k: Option<&mut LocalTangent<8>>,
-) -> Result<Volumes, ElementError> {
+    mut k: Option<&mut LocalTangent<N>>,
+) -> Result<Volumes<N>, ElementError> {
     let (mat, state_old) = (e.mat, e.state_old);
-    let (x0, u) = (nodes::<8>(e.x0), nodes::<8>(e.u));
+    let (x0, u) = (nodes::<N>(e.x0), nodes::<N>(e.u));
     let ns = mat.n_state();
     assert!(
-        state_old.len() == 8 * ns && state_new.len() == 8 * ns,
-        "history length must be 8 × n_state"
+        state_old.len() == G * ns && state_new.len() == G * ns,
+        "history length must be n_gauss × n_state"
     );
     if mat.kinematics() != Kinematics::Finite {
         return Err(no_split(mat));
     }
-    let (pts, gbar) = element_kinematics(&HEX8, true, Kinematics::Finite, x0, u)?;
+    let (pts, gbar) = element_kinematics(tab, true, Kinematics::Finite, x0, u)?;
     let gbar = gbar.expect("F-bar kinematics return the mean gradients");
     let big_v: f64 = pts.iter().map(|q| q.w).sum();
     let s = pressure_scale(mat, big_v.abs());
     let p = s * pi;
     let jbar = pts[0].f.determinant();
     let v = jbar * big_v;
-    let b: [[f64; 3]; 8] = std::array::from_fn(|a| gbar[a].map(|c| c * v));
-    let mut bhat = [[0.0; 3]; 8];
+    let b: [[f64; 3]; N] = std::array::from_fn(|a| gbar[a].map(|c| c * v));
+    let mut bhat = [[0.0; 3]; N];
     for q in &pts {
         for (bh, g) in bhat.iter_mut().zip(&q.grad) {
             for c in 0..3 {
@@ -204,42 +251,46 @@ fn core(
     })
 }
 
-/// Residual rows of one hybrid hex8 with its pressure block `pi` (the element's block
-/// of three unknowns: π and two inert ones): `f` (27: the 8 nodes' rows, then the block's)
-/// and, with `k`, the 27×27 Jacobian (row-major). `hourglass` > 0 adds the hourglass
-/// spring of [`super::reduced`] (as on F-bar).
-fn force(
+/// Residual rows of one hybrid element of N nodes with its pressure block `pi` (the
+/// element's block of three unknowns: π and two inert ones): `f` (3N + 3: the nodes'
+/// rows, then the block's) and, with `k`, the (3N + 3)² Jacobian (row-major).
+/// `hourglass` > 0 (hex8 only) adds the hourglass spring of [`super::reduced`] (as on
+/// F-bar).
+fn force<const N: usize, const G: usize>(
+    tab: &Tabulated<3, N, G>,
     e: &ElementData,
     pi: &[f64; 3],
     hourglass: f64,
     out: ElementOutput,
 ) -> Result<(), ElementError> {
     let ElementOutput { state_new, f, k } = out;
-    let (x0, u, mat) = (nodes::<8>(e.x0), nodes::<8>(e.u), e.mat);
-    assert_eq!(f.len(), DOFS, "force slice length");
+    let mat = e.mat;
+    let (nu, dofs) = (3 * N, 3 * N + 3);
+    assert_eq!(f.len(), dofs, "force slice length");
     match k {
         Some(k) => {
-            assert_eq!(k.len(), DOFS * DOFS, "tangent slice length");
-            let mut kloc = [[[[0.0; 3]; 8]; 3]; 8];
-            let vols = core(e, pi[0], state_new, &mut f[..24], Some(&mut kloc))?;
+            assert_eq!(k.len(), dofs * dofs, "tangent slice length");
+            let mut kloc = [[[[0.0; 3]; N]; 3]; N];
+            let vols = core(tab, e, pi[0], state_new, &mut f[..nu], Some(&mut kloc))?;
             k.fill(0.0);
             let kuu = kloc.as_flattened().as_flattened().as_flattened();
-            for r in 0..24 {
-                k[r * DOFS..r * DOFS + 24].copy_from_slice(&kuu[r * 24..r * 24 + 24]);
+            for r in 0..nu {
+                k[r * dofs..r * dofs + nu].copy_from_slice(&kuu[r * nu..r * nu + nu]);
             }
             let s = vols.s;
             let d = -s * s * vols.big_v / vols.k0;
             let up = s * vols.u2 / vols.k0;
-            for a in 0..8 {
+            for a in 0..N {
                 for i in 0..3 {
-                    k[(3 * a + i) * DOFS + 24] = s * vols.bhat[a][i];
-                    k[24 * DOFS + 3 * a + i] = up * vols.b[a][i];
+                    k[(3 * a + i) * dofs + nu] = s * vols.bhat[a][i];
+                    k[nu * dofs + 3 * a + i] = up * vols.b[a][i];
                 }
             }
-            for q in 24..27 {
-                k[q * DOFS + q] = d;
+            for q in nu..dofs {
+                k[q * dofs + q] = d;
             }
             if hourglass > 0.0 {
+                let (x0, u) = (nodes::<8>(e.x0), nodes::<8>(e.u));
                 let mut k24 = [0.0; 576];
                 let mut f24 = [0.0; 24];
                 super::reduced::add_hourglass(
@@ -253,15 +304,16 @@ fn force(
                 for r in 0..24 {
                     f[r] += f24[r];
                     for c in 0..24 {
-                        k[r * DOFS + c] += k24[r * 24 + c];
+                        k[r * dofs + c] += k24[r * 24 + c];
                     }
                 }
             }
             pressure_rows(&vols, pi, f);
         }
         None => {
-            let vols = core(e, pi[0], state_new, &mut f[..24], None)?;
+            let vols = core(tab, e, pi[0], state_new, &mut f[..nu], None)?;
             if hourglass > 0.0 {
+                let (x0, u) = (nodes::<8>(e.x0), nodes::<8>(e.u));
                 super::reduced::add_hourglass(
                     x0,
                     u,
@@ -277,27 +329,33 @@ fn force(
     Ok(())
 }
 
-/// r_π = s V (U'(J̄) − p)/K₀ and the inert entries' rows.
-fn pressure_rows(vols: &Volumes, pi: &[f64; 3], f: &mut [f64]) {
+/// r_π = s V (U'(J̄) − p)/K₀ and the inert entries' rows (the last three of `f`).
+fn pressure_rows<const N: usize>(vols: &Volumes<N>, pi: &[f64; 3], f: &mut [f64]) {
     let s = vols.s;
     let d = -s * s * vols.big_v / vols.k0;
-    f[24] = s * vols.big_v * (vols.u1 - vols.p) / vols.k0;
-    f[25] = d * pi[1];
-    f[26] = d * pi[2];
+    let nu = 3 * N;
+    f[nu] = s * vols.big_v * (vols.u1 - vols.p) / vols.k0;
+    f[nu + 1] = d * pi[1];
+    f[nu + 2] = d * pi[2];
 }
 
 /// Volume-averaged Cauchy stress of the element with its pressure unknown `pi`: F-bar's,
 /// with J̄ p in place of J̄ U'(J̄) (equal at a solution).
-fn stress(e: &ElementData, pi: f64) -> Result<[f64; 6], ElementError> {
-    let (x0, u) = (nodes::<8>(e.x0), nodes::<8>(e.u));
+fn stress<const N: usize, const G: usize>(
+    tab: &Tabulated<3, N, G>,
+    e: &ElementData,
+    pi: f64,
+) -> Result<[f64; 6], ElementError> {
+    let (x0, u) = (nodes::<N>(e.x0), nodes::<N>(e.u));
     let ns = e.mat.n_state();
-    let mut scratch = vec![0.0; 8 * ns];
+    let mut scratch = vec![0.0; G * ns];
     // Σ_a x_a ⊗ f_a = ∫ τ dV for any element force f_a = ∫ τ ∇ₓN_a dV (Σ_a x_a ⊗ ∇ₓN_a
     // = I): the mean stress from the force without a second stress loop.
-    let mut f = [0.0; 24];
-    let vols = core(e, pi, &mut scratch, &mut f, None)?;
+    let mut f = [[0.0; 3]; N];
+    let vols = core(tab, e, pi, &mut scratch, f.as_flattened_mut(), None)?;
     let mut tau = [0.0; 6];
-    for a in 0..8 {
+    let f = f.as_flattened();
+    for a in 0..N {
         let x = [x0[a][0] + u[a][0], x0[a][1] + u[a][1], x0[a][2] + u[a][2]];
         let fa = &f[3 * a..3 * a + 3];
         tau[0] += x[0] * fa[0];
@@ -387,6 +445,93 @@ mod tests {
             )
             .unwrap();
         (f, k)
+    }
+
+    /// The hybrid tet10's 33×33 Jacobian against central differences on a curved,
+    /// deformed tet10, with the pressure off equilibrium; condensed, it is the
+    /// mean-dilatation element, and at the equilibrium pressure their forces agree.
+    #[test]
+    fn hybrid_tet10_jacobian_and_condensed_force() {
+        let c = [
+            [0.0, 0.1, 0.0],
+            [1.2, 0.0, 0.1],
+            [0.1, 0.9, -0.1],
+            [0.2, 0.3, 1.0],
+        ];
+        let mut x0 = c.to_vec();
+        for (e, [i, j]) in crate::fem::shape::TET10_EDGES.into_iter().enumerate() {
+            x0.push(std::array::from_fn(|k| {
+                0.5 * (c[i][k] + c[j][k]) + 0.03 * ((5 * e + 2 * k) as f64).sin()
+            }));
+        }
+        let f = comp();
+        let u0: Vec<[f64; 3]> = x0
+            .iter()
+            .enumerate()
+            .map(|(a, x)| {
+                let y = f * Vector3::from(*x);
+                std::array::from_fn(|k| y[k] - x[k] + 0.02 * ((3 * a + k) as f64).cos())
+            })
+            .collect();
+        let kern = HYBRID_TET10;
+        let n = 33;
+        let run = |u: &[[f64; 3]], pi: &[f64; 3], mat: &dyn Material, with_k: bool| {
+            let ns = 4 * mat.n_state();
+            let (old, mut new) = (vec![0.0; ns], vec![0.0; ns]);
+            let (mut fv, mut k) = (vec![0.0; n], vec![0.0; n * n]);
+            kern.force(
+                &ElementData::new(&x0, u, mat, &old).with_own(pi),
+                ElementOutput::new(&mut new, &mut fv, with_k.then_some(&mut k[..])),
+            )
+            .unwrap();
+            (fv, k)
+        };
+        for mat in mats() {
+            let s = pressure_scale(mat.as_ref(), 1.0);
+            let pi = [0.3 * mat.shear_modulus() / s, 0.1, -0.2];
+            let (_, k) = run(&u0, &pi, mat.as_ref(), true);
+            let kmax = k.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            let h = 1e-6;
+            for col in 0..n {
+                let (mut up, mut um, mut pp, mut pm) = (u0.clone(), u0.clone(), pi, pi);
+                if col < 30 {
+                    up[col / 3][col % 3] += h;
+                    um[col / 3][col % 3] -= h;
+                } else {
+                    pp[col - 30] += h;
+                    pm[col - 30] -= h;
+                }
+                let (fp, _) = run(&up, &pp, mat.as_ref(), false);
+                let (fm, _) = run(&um, &pm, mat.as_ref(), false);
+                for row in 0..n {
+                    let fd = (fp[row] - fm[row]) / (2.0 * h);
+                    let an = k[row * n + col];
+                    assert!(
+                        (fd - an).abs() < 1e-6 * kmax,
+                        "{mat:?}: K[{row},{col}] = {an}, fd {fd}"
+                    );
+                }
+            }
+            // At the pressure its own row makes zero, the force is the condensed one's.
+            let (f0, _) = run(&u0, &[0.0; 3], mat.as_ref(), false);
+            let (f1, _) = run(&u0, &[1.0, 0.0, 0.0], mat.as_ref(), false);
+            let pi_eq = -f0[30] / (f1[30] - f0[30]);
+            let (fh, _) = run(&u0, &[pi_eq, 0.0, 0.0], mat.as_ref(), false);
+            let ns = 4 * mat.n_state();
+            let (old, mut new) = (vec![0.0; ns], vec![0.0; ns]);
+            let mut fc = vec![0.0; 30];
+            kern.condensed()
+                .unwrap()
+                .force(
+                    &ElementData::new(&x0, &u0, mat.as_ref(), &old),
+                    ElementOutput::new(&mut new, &mut fc, None),
+                )
+                .unwrap();
+            let scale = fc.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            for (a, b) in fc.iter().zip(&fh[..30]) {
+                assert!((a - b).abs() < 1e-9 * scale, "{mat:?}: {a} vs {b}");
+            }
+        }
     }
 
     /// The 27×27 Jacobian (pressure block included) equals central differences of the

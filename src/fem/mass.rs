@@ -11,7 +11,7 @@
 use super::element::{element_force, ElementError, Formulation};
 use super::kernel::{ElementData, ElementOutput};
 use super::kinematics::reference_gradients;
-use super::shape::{HEX8, TET4};
+use super::shape::{tet10_dn, tet10_n, HEX8, TET4, WEDGE6};
 use crate::material::Material;
 use crate::mesh::ElemKind;
 
@@ -38,6 +38,26 @@ pub fn consistent_mass(kind: ElemKind, x0: &[[f64; 3]], rho: f64, m: &mut [f64])
                 }
             }
         }
+        ElemKind::Tet10 => {
+            tet10_consistent_mass(x0.try_into().expect("tet10 has 10 nodes"), rho, m)
+        }
+        // The 3 × 2 rule: exact for a right prism (det J₀ constant, N_a N_b quadratic in
+        // (ξ, η) and in ζ).
+        ElemKind::Wedge6 => {
+            let x: &[[f64; 3]; 6] = x0.try_into().expect("wedge6 has 6 nodes");
+            assert_eq!(m.len(), 36);
+            m.fill(0.0);
+            for g in 0..6 {
+                let det = reference_gradients(x, &WEDGE6.dn[g]).1;
+                let w = rho * WEDGE6.weights[g] * det;
+                let n = &WEDGE6.n[g];
+                for a in 0..6 {
+                    for b in 0..6 {
+                        m[6 * a + b] += w * n[a] * n[b];
+                    }
+                }
+            }
+        }
         ElemKind::Tet4 => {
             let x: &[[f64; 3]; 4] = x0.try_into().expect("tet4 has 4 nodes");
             assert_eq!(m.len(), 16);
@@ -51,11 +71,60 @@ pub fn consistent_mass(kind: ElemKind, x0: &[[f64; 3]], rho: f64, m: &mut [f64])
     }
 }
 
-/// Lumped (row-sum) mass of each node of one element.
+/// The tet10's consistent mass by a 4×4×4 collapsed (Duffy) Gauss rule on the unit
+/// tet (the Gauss–Legendre points in each collapsed direction), exact for polynomials of
+/// degree 5 in ξ: N_a N_b det J₀ is of degree 4 on a straight-sided element (det J₀
+/// constant); with curved edges det J₀ is cubic and the rule is accurate, not exact.
+fn tet10_consistent_mass(x: &[[f64; 3]; 10], rho: f64, m: &mut [f64]) {
+    const P: [f64; 4] = [
+        -0.861_136_311_594_052_6,
+        -0.339_981_043_584_856_3,
+        0.339_981_043_584_856_3,
+        0.861_136_311_594_052_6,
+    ];
+    const W: [f64; 4] = [
+        0.347_854_845_137_453_9,
+        0.652_145_154_862_546_1,
+        0.652_145_154_862_546_1,
+        0.347_854_845_137_453_9,
+    ];
+    assert_eq!(m.len(), 100);
+    m.fill(0.0);
+    for (i, &pu) in P.iter().enumerate() {
+        for (j, &pv) in P.iter().enumerate() {
+            for (k, &pw) in P.iter().enumerate() {
+                let (u, v, w) = (0.5 * (pu + 1.0), 0.5 * (pv + 1.0), 0.5 * (pw + 1.0));
+                // ξ = u, η = v(1 − u), ζ = w(1 − u)(1 − v); dξdηdζ = (1 − u)²(1 − v).
+                let xi = [u, v * (1.0 - u), w * (1.0 - u) * (1.0 - v)];
+                let jac = (1.0 - u) * (1.0 - u) * (1.0 - v) * W[i] * W[j] * W[k] / 8.0;
+                let det = reference_gradients(x, &tet10_dn(xi)).1;
+                let n = tet10_n(xi);
+                let s = rho * jac * det;
+                for a in 0..10 {
+                    for b in 0..10 {
+                        m[10 * a + b] += s * n[a] * n[b];
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// Lumped mass of each node of one element: row sums of the consistent matrix (hex8,
+/// tet4); for the tet10, whose corner rows sum to a negative mass, the diagonal scaled
+/// to the element's mass (Hinton, Rock & Zienkiewicz 1976), positive at every node.
 pub fn lumped_mass(kind: ElemKind, x0: &[[f64; 3]], rho: f64, m: &mut [f64]) {
     let n = x0.len();
-    let mut full = [0.0; 64];
+    let mut full = [0.0; crate::mesh::MAX_NODES * crate::mesh::MAX_NODES];
     consistent_mass(kind, x0, rho, &mut full[..n * n]);
+    if kind == ElemKind::Tet10 {
+        let total: f64 = full[..n * n].iter().sum();
+        let diag: f64 = (0..n).map(|a| full[a * n + a]).sum();
+        for a in 0..n {
+            m[a] = full[a * n + a] * total / diag;
+        }
+        return;
+    }
     for a in 0..n {
         m[a] = full[a * n..(a + 1) * n].iter().sum();
     }
@@ -76,9 +145,9 @@ pub fn max_frequency(
 ) -> Result<f64, ElementError> {
     let n = x0.len();
     let w = 3 * n;
-    let zero = [[0.0; 3]; 8];
+    let zero = [[0.0; 3]; crate::mesh::MAX_NODES];
     let mut scratch = state.to_vec();
-    let mut f = [0.0; 24];
+    let mut f = [0.0; 3 * crate::mesh::MAX_NODES];
     let mut k = vec![0.0; w * w];
     element_force(
         kind,
@@ -86,7 +155,7 @@ pub fn max_frequency(
         &ElementData::new(x0, &zero[..n], mat, state),
         ElementOutput::new(&mut scratch, &mut f[..w], Some(&mut k)),
     )?;
-    let mut ml = [0.0; 8];
+    let mut ml = [0.0; crate::mesh::MAX_NODES];
     lumped_mass(kind, x0, mat.density(), &mut ml[..n]);
     let s: Vec<f64> = (0..w).map(|i| 1.0 / ml[i / 3].sqrt()).collect();
     let a = nalgebra::DMatrix::from_fn(w, w, |i, j| {

@@ -5,7 +5,9 @@
 use super::error::{At, ElementError};
 use super::kernel::nodes;
 use super::kinematics::reference_gradients;
-use super::shape::{hex8_dn, Tabulated, HEX8, HEX8_NODES, TET4};
+use super::shape::{
+    hex8_dn, tet10_dn, wedge6_dn, Tabulated, HEX8, HEX8_NODES, TET10, TET4, WEDGE6,
+};
 use crate::mesh::ElemKind;
 
 /// Reference-configuration check: `Err` with a short reason if det J ≤ 0, or tiny
@@ -51,6 +53,44 @@ pub fn check_reference(kind: ElemKind, x0: &[[f64; 3]]) -> Result<(), ElementErr
             At::Centroid,
             1.0 / 6.0,
         ),
+        // Gauss points, then corners: a midside node pulled far off its edge folds the
+        // element near a corner before its points see it.
+        ElemKind::Tet10 => {
+            let x0: &[[f64; 3]; 10] = nodes(x0);
+            for g in 0..4 {
+                check(
+                    reference_gradients(x0, &TET10.dn[g]).1,
+                    At::Gauss(g),
+                    1.0 / 6.0,
+                )?;
+            }
+            for c in 0..4 {
+                let xi = std::array::from_fn(|j| if c == j + 1 { 1.0 } else { 0.0 });
+                let dn = tet10_dn(xi);
+                check(reference_gradients(x0, &dn).1, At::Corner(c), 1.0 / 6.0)?;
+            }
+            Ok(())
+        }
+        // Gauss points, then corners (reference volume 1).
+        ElemKind::Wedge6 => {
+            let x0: &[[f64; 3]; 6] = nodes(x0);
+            for g in 0..6 {
+                check(reference_gradients(x0, &WEDGE6.dn[g]).1, At::Gauss(g), 1.0)?;
+            }
+            const CORNERS: [[f64; 3]; 6] = [
+                [0.0, 0.0, -1.0],
+                [1.0, 0.0, -1.0],
+                [0.0, 1.0, -1.0],
+                [0.0, 0.0, 1.0],
+                [1.0, 0.0, 1.0],
+                [0.0, 1.0, 1.0],
+            ];
+            for (c, xi) in CORNERS.iter().enumerate() {
+                let dn = wedge6_dn(*xi);
+                check(reference_gradients(x0, &dn).1, At::Corner(c), 1.0)?;
+            }
+            Ok(())
+        }
     }
 }
 
@@ -65,6 +105,8 @@ pub fn element_volume(kind: ElemKind, x0: &[[f64; 3]]) -> f64 {
     match kind {
         ElemKind::Hex8 => vol(&HEX8, nodes(x0)),
         ElemKind::Tet4 => vol(&TET4, nodes(x0)),
+        ElemKind::Tet10 => vol(&TET10, nodes(x0)),
+        ElemKind::Wedge6 => vol(&WEDGE6, nodes(x0)),
     }
 }
 
@@ -81,9 +123,8 @@ pub fn char_length(kind: ElemKind, x0: &[[f64; 3]]) -> f64 {
 pub fn thickness(kind: ElemKind, x: &[[f64; 3]]) -> Option<f64> {
     let v = element_volume(kind, x);
     let mut corners = [[0.0; 3]; 4];
-    let amax = kind
-        .faces()
-        .iter()
+    let amax = (0..kind.faces().len())
+        .map(|fi| kind.face_corners(fi))
         .map(|f| {
             for (c, &i) in corners.iter_mut().zip(f.iter()) {
                 *c = x[i];

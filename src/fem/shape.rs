@@ -69,6 +69,61 @@ pub const fn tet4_dn(_xi: [f64; 3]) -> [[f64; 3]; 4] {
     ]
 }
 
+/// Edges of the tet10 holding its midside nodes 4..9, in Gmsh's order (VTK swaps the
+/// last two: its node 8 is on edge 1-3 and 9 on 2-3).
+pub const TET10_EDGES: [[usize; 2]; 6] = [[0, 1], [1, 2], [2, 0], [0, 3], [2, 3], [1, 3]];
+
+/// Barycentric coordinates L = (1 − ξ − η − ζ, ξ, η, ζ) and their constant gradients.
+const fn tet_bary(xi: [f64; 3]) -> [f64; 4] {
+    tet4_n(xi)
+}
+
+/// Quadratic tet10 shape functions: corners N_i = L_i (2 L_i − 1), midside nodes
+/// N_ij = 4 L_i L_j (Hughes §3.I, Zienkiewicz & Taylor vol. 1 §6.6).
+pub const fn tet10_n(xi: [f64; 3]) -> [f64; 10] {
+    let l = tet_bary(xi);
+    let mut n = [0.0; 10];
+    let mut a = 0;
+    while a < 4 {
+        n[a] = l[a] * (2.0 * l[a] - 1.0);
+        a += 1;
+    }
+    let mut e = 0;
+    while e < 6 {
+        let [i, j] = TET10_EDGES[e];
+        n[4 + e] = 4.0 * l[i] * l[j];
+        e += 1;
+    }
+    n
+}
+
+/// ∂N_a/∂ξ of the tet10, `[a][j]`.
+pub const fn tet10_dn(xi: [f64; 3]) -> [[f64; 3]; 10] {
+    let l = tet_bary(xi);
+    let dl = tet4_dn(xi);
+    let mut d = [[0.0; 3]; 10];
+    let mut a = 0;
+    while a < 4 {
+        let mut j = 0;
+        while j < 3 {
+            d[a][j] = (4.0 * l[a] - 1.0) * dl[a][j];
+            j += 1;
+        }
+        a += 1;
+    }
+    let mut e = 0;
+    while e < 6 {
+        let [p, q] = TET10_EDGES[e];
+        let mut j = 0;
+        while j < 3 {
+            d[4 + e][j] = 4.0 * (l[p] * dl[q][j] + l[q] * dl[p][j]);
+            j += 1;
+        }
+        e += 1;
+    }
+    d
+}
+
 /// Bilinear quad4 shape functions N_a = ¼ (1 + ξ ξ_a)(1 + η η_a).
 pub const fn quad4_n(xi: [f64; 2]) -> [f64; 4] {
     let mut n = [0.0; 4];
@@ -104,6 +159,58 @@ pub const fn tri3_n(xi: [f64; 2]) -> [f64; 3] {
 /// ∂N_a/∂ξ of the tri3 (constant).
 pub const fn tri3_dn(_xi: [f64; 2]) -> [[f64; 2]; 3] {
     [[-1.0, -1.0], [1.0, 0.0], [0.0, 1.0]]
+}
+
+/// Wedge6 (prism) shape functions: triangle (ξ, η) × ζ ∈ [−1, 1]; nodes 0-1-2 the
+/// bottom triangle (ζ = −1, counter-clockwise seen from the top), 3-4-5 above them
+/// (Gmsh's order): N = L_i (1 ∓ ζ)/2 with L = (1 − ξ − η, ξ, η).
+pub const fn wedge6_n(xi: [f64; 3]) -> [f64; 6] {
+    let l = [1.0 - xi[0] - xi[1], xi[0], xi[1]];
+    let (b, t) = (0.5 * (1.0 - xi[2]), 0.5 * (1.0 + xi[2]));
+    [l[0] * b, l[1] * b, l[2] * b, l[0] * t, l[1] * t, l[2] * t]
+}
+
+/// ∂N_a/∂ξ of the wedge6.
+pub const fn wedge6_dn(xi: [f64; 3]) -> [[f64; 3]; 6] {
+    let l = [1.0 - xi[0] - xi[1], xi[0], xi[1]];
+    let (b, t) = (0.5 * (1.0 - xi[2]), 0.5 * (1.0 + xi[2]));
+    [
+        [-b, -b, -0.5 * l[0]],
+        [b, 0.0, -0.5 * l[1]],
+        [0.0, b, -0.5 * l[2]],
+        [-t, -t, 0.5 * l[0]],
+        [t, 0.0, 0.5 * l[1]],
+        [0.0, t, 0.5 * l[2]],
+    ]
+}
+
+/// Quadratic tri6 shape functions: corners (0,0), (1,0), (0,1), then the midside nodes
+/// of edges 0-1, 1-2, 2-0 (Gmsh's order, the tet10's face order): N = L(2L − 1) at a
+/// corner, 4 L_i L_j at a midside node, with L = (1 − ξ − η, ξ, η).
+pub const fn tri6_n(xi: [f64; 2]) -> [f64; 6] {
+    let l = [1.0 - xi[0] - xi[1], xi[0], xi[1]];
+    [
+        l[0] * (2.0 * l[0] - 1.0),
+        l[1] * (2.0 * l[1] - 1.0),
+        l[2] * (2.0 * l[2] - 1.0),
+        4.0 * l[0] * l[1],
+        4.0 * l[1] * l[2],
+        4.0 * l[2] * l[0],
+    ]
+}
+
+/// ∂N_a/∂ξ of the tri6 (∂L/∂ξ = (−1, 1, 0), ∂L/∂η = (−1, 0, 1)).
+pub const fn tri6_dn(xi: [f64; 2]) -> [[f64; 2]; 6] {
+    let l = [1.0 - xi[0] - xi[1], xi[0], xi[1]];
+    let c0 = 1.0 - 4.0 * l[0];
+    [
+        [c0, c0],
+        [4.0 * l[1] - 1.0, 0.0],
+        [0.0, 4.0 * l[2] - 1.0],
+        [4.0 * (l[0] - l[1]), -4.0 * l[1]],
+        [4.0 * l[2], 4.0 * l[1]],
+        [-4.0 * l[2], 4.0 * (l[0] - l[2])],
+    ]
 }
 
 /// A reference element's shape functions tabulated at its integration rule:
@@ -181,6 +288,87 @@ const fn tri3_table() -> Tabulated<2, 3, 3> {
     t
 }
 
+const fn wedge6_table() -> Tabulated<3, 6, 6> {
+    // The tri3's 3-point rule (degree 2) times 2-point Gauss in ζ (degree 3): exact for
+    // the volume and the stiffness of a prism with parallel triangles.
+    let tri = [
+        [1.0 / 6.0, 1.0 / 6.0],
+        [2.0 / 3.0, 1.0 / 6.0],
+        [1.0 / 6.0, 2.0 / 3.0],
+    ];
+    let mut t = Tabulated {
+        points: [[0.0; 3]; 6],
+        weights: [1.0 / 6.0; 6],
+        n: [[0.0; 6]; 6],
+        dn: [[[0.0; 3]; 6]; 6],
+    };
+    let mut g = 0;
+    while g < 6 {
+        let z = if g < 3 { -GAUSS2 } else { GAUSS2 };
+        let p = [tri[g % 3][0], tri[g % 3][1], z];
+        t.points[g] = p;
+        t.n[g] = wedge6_n(p);
+        t.dn[g] = wedge6_dn(p);
+        g += 1;
+    }
+    t
+}
+
+const fn tri6_table() -> Tabulated<2, 6, 6> {
+    // Dunavant's 6-point rule of degree 4 (Strang–Fix): barycentric (a, b, b) with
+    // a = 0.108103018168070, b = 0.445948490915965, weight 0.223381589678011, and
+    // (c, d, d) with c = 0.816847572980459, d = 0.091576213509771, weight
+    // 0.109951743655322 (weights for area 1, halved here).
+    const A: f64 = 0.108_103_018_168_070;
+    const B: f64 = 0.445_948_490_915_965;
+    const C: f64 = 0.816_847_572_980_459;
+    const D: f64 = 0.091_576_213_509_771;
+    const WA: f64 = 0.5 * 0.223_381_589_678_011;
+    const WC: f64 = 0.5 * 0.109_951_743_655_322;
+    let points = [[B, B], [A, B], [B, A], [D, D], [C, D], [D, C]];
+    let mut t = Tabulated {
+        points,
+        weights: [WA, WA, WA, WC, WC, WC],
+        n: [[0.0; 6]; 6],
+        dn: [[[0.0; 2]; 6]; 6],
+    };
+    let mut g = 0;
+    while g < 6 {
+        t.n[g] = tri6_n(points[g]);
+        t.dn[g] = tri6_dn(points[g]);
+        g += 1;
+    }
+    t
+}
+
+const fn tet10_table() -> Tabulated<3, 10, 4> {
+    // The 4-point rule of degree 2 (Hughes Table 3.I.2; Abaqus C3D10): barycentric
+    // (a, b, b, b) and permutations, a = (5 + 3√5)/20, b = (5 − √5)/20. The stiffness
+    // integrand Bᵀ C B of an undistorted (straight-sided) tet10 is quadratic, so the
+    // rule is exact for it, and for the volume (constant det J₀); it has no spurious
+    // zero-energy modes on the element.
+    const A: f64 = 0.585_410_196_624_968_5;
+    const B: f64 = 0.138_196_601_125_010_5;
+    let points = [[B, B, B], [A, B, B], [B, A, B], [B, B, A]];
+    let mut t = Tabulated {
+        points,
+        weights: [1.0 / 24.0; 4],
+        n: [[0.0; 10]; 4],
+        dn: [[[0.0; 3]; 10]; 4],
+    };
+    let mut g = 0;
+    while g < 4 {
+        t.n[g] = tet10_n(points[g]);
+        t.dn[g] = tet10_dn(points[g]);
+        g += 1;
+    }
+    t
+}
+
+/// Tet10 with the 4-point degree-2 rule (exact for the stiffness of a straight-sided
+/// element).
+pub const TET10: Tabulated<3, 10, 4> = tet10_table();
+
 /// Hex8 with the 2×2×2 Gauss rule (exact for the trilinear element's mass and volume).
 pub const HEX8: Tabulated<3, 8, 8> = hex8_table();
 /// Tet4 with the 1-point centroid rule (exact: ∇N is constant).
@@ -192,6 +380,11 @@ pub const TET4: Tabulated<3, 4, 1> = Tabulated {
 };
 /// Quad4 face with the 2×2 Gauss rule (exact for the area vector x,ξ × x,η).
 pub const QUAD4: Tabulated<2, 4, 4> = quad4_table();
+/// Wedge6 with the 3 × 2 rule (reference volume 1).
+pub const WEDGE6: Tabulated<3, 6, 6> = wedge6_table();
+/// Tri6 face with the 6-point degree-4 rule: N_a (degree 2) times the area vector of a
+/// curved face (degree 2) is exact; a flat face needs degree 2 only.
+pub const TRI6: Tabulated<2, 6, 6> = tri6_table();
 /// Tri3 face with the 3-point rule (N_a times constant area vector needs degree 1; the
 /// extra points keep consistent face masses exact later).
 pub const TRI3: Tabulated<2, 3, 3> = tri3_table();
@@ -259,6 +452,10 @@ mod tests {
         for x in PTS3 {
             assert!((hex8_n(x).iter().sum::<f64>() - 1.0).abs() < 1e-14);
             assert!((tet4_n(x).iter().sum::<f64>() - 1.0).abs() < 1e-14);
+            assert!((tet10_n(x).iter().sum::<f64>() - 1.0).abs() < 1e-14);
+            for j in 0..3 {
+                assert!(tet10_dn(x).iter().map(|d| d[j]).sum::<f64>().abs() < 1e-13);
+            }
             for j in 0..3 {
                 assert!(hex8_dn(x).iter().map(|d| d[j]).sum::<f64>().abs() < 1e-14);
             }
@@ -291,6 +488,20 @@ mod tests {
         for (a, p) in tet.iter().enumerate() {
             assert_eq!(tet4_n(*p)[a], 1.0);
         }
+        // Tet10: corners, then the midpoints of its edges.
+        let mut t10: Vec<[f64; 3]> = tet.to_vec();
+        for [i, j] in TET10_EDGES {
+            t10.push(std::array::from_fn(|c| 0.5 * (tet[i][c] + tet[j][c])));
+        }
+        for (a, p) in t10.iter().enumerate() {
+            let n = tet10_n(*p);
+            for (b, v) in n.iter().enumerate() {
+                assert!(
+                    (v - if a == b { 1.0 } else { 0.0 }).abs() < 1e-15,
+                    "{a} {b} {v}"
+                );
+            }
+        }
     }
 
     #[test]
@@ -298,6 +509,7 @@ mod tests {
         for x in PTS3 {
             fd3(hex8_n, hex8_dn, x);
             fd3(tet4_n, tet4_dn, x);
+            fd3(tet10_n, tet10_dn, x);
             fd2(quad4_n, quad4_dn, [x[0], x[1]]);
             fd2(tri3_n, tri3_dn, [x[0], x[1]]);
         }
@@ -323,5 +535,18 @@ mod tests {
             .map(|g| TRI3.weights[g] * TRI3.points[g][0].powi(2))
             .sum();
         assert!((q - 1.0 / 12.0).abs() < 1e-14);
+        // The tet10 rule: weights sum to 1/6, exact for every monomial of degree ≤ 2
+        // (∫ ξ² = 1/60, ∫ ξη = 1/120 on the unit tet), and its tables match.
+        assert!((TET10.weights.iter().sum::<f64>() - 1.0 / 6.0).abs() < 1e-15);
+        let int = |f: &dyn Fn([f64; 3]) -> f64| -> f64 {
+            (0..4).map(|g| TET10.weights[g] * f(TET10.points[g])).sum()
+        };
+        assert!((int(&|p| p[0]) - 1.0 / 24.0).abs() < 1e-15);
+        assert!((int(&|p| p[1] * p[1]) - 1.0 / 60.0).abs() < 1e-15);
+        assert!((int(&|p| p[0] * p[2]) - 1.0 / 120.0).abs() < 1e-15);
+        for g in 0..4 {
+            assert_eq!(TET10.n[g], tet10_n(TET10.points[g]));
+            assert_eq!(TET10.dn[g], tet10_dn(TET10.points[g]));
+        }
     }
 }

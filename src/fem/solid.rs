@@ -47,6 +47,29 @@ impl<const N: usize, const G: usize> ElementKernel for Standard<N, G> {
     }
 }
 
+/// The mean-dilatation element of any tabulated kind: F-bar with J̄ = v/V, the element's
+/// volume ratio (Simo, Taylor & Pister 1985). On a tet10 it is P2/P0 with the constant
+/// pressure condensed, which does not lock for nearly incompressible materials.
+#[derive(Debug, Clone, Copy)]
+pub struct MeanDilatation<const N: usize, const G: usize> {
+    pub tab: &'static Tabulated<3, N, G>,
+}
+
+impl<const N: usize, const G: usize> ElementKernel for MeanDilatation<N, G> {
+    fn n_nodes(&self) -> usize {
+        N
+    }
+    fn n_points(&self) -> usize {
+        G
+    }
+    fn force(&self, e: &ElementData, out: ElementOutput) -> Result<(), ElementError> {
+        force_kernel(self.tab, true, e, out)
+    }
+    fn stress(&self, e: &ElementData) -> Result<[f64; 6], ElementError> {
+        stress_kernel(self.tab, true, e)
+    }
+}
+
 /// The F-bar hex8 (see [`super::element::Formulation::FBar`]), with the hourglass spring
 /// of [`super::reduced`] scaled by `hourglass` when it is positive.
 #[derive(Debug, Clone, Copy)]

@@ -1,4 +1,4 @@
-//! Surface loads on element faces (quad4 or tri3, nodes in the face's outward order as
+//! Surface loads on element faces (quad4, tri3 or tri6, nodes in the face's outward order as
 //! in [`crate::mesh::ElemKind::faces`]), so x,ξ × x,η points out of the body.
 //!
 //! * Dead traction: f_a = ∫ N_a t dA, t per reference area (Hughes §3.9).
@@ -10,7 +10,7 @@
 //! nalgebra's `cross` and `norm` compute the same products and sums in the same order as
 //! the hand-written ones they replaced (results bit for bit unchanged).
 
-use super::shape::{Tabulated, QUAD4, TRI3};
+use super::shape::{Tabulated, QUAD4, TRI3, TRI6};
 use nalgebra::Vector3;
 
 /// Consistent nodal forces of a dead traction `t` (force per reference area) on a face.
@@ -37,7 +37,8 @@ pub fn traction_face(x0: &[[f64; 3]], t: [f64; 3], f: &mut [f64]) {
     match x0.len() {
         4 => go(&QUAD4, nodes(x0), t, f),
         3 => go(&TRI3, nodes(x0), t, f),
-        n => panic!("face with {n} nodes: only quad4 and tri3 faces"),
+        6 => go(&TRI6, nodes(x0), t, f),
+        n => panic!("face with {n} nodes: only quad4, tri3 and tri6 faces"),
     }
 }
 
@@ -98,7 +99,8 @@ pub fn pressure_face(
     match x0.len() {
         4 => go(&QUAD4, nodes(x0), nodes(u), p, f, k),
         3 => go(&TRI3, nodes(x0), nodes(u), p, f, k),
-        n => panic!("face with {n} nodes: only quad4 and tri3 faces"),
+        6 => go(&TRI6, nodes(x0), nodes(u), p, f, k),
+        n => panic!("face with {n} nodes: only quad4, tri3 and tri6 faces"),
     }
 }
 
@@ -115,7 +117,8 @@ pub fn face_area(x0: &[[f64; 3]]) -> f64 {
     match x0.len() {
         4 => go(&QUAD4, nodes(x0)),
         3 => go(&TRI3, nodes(x0)),
-        n => panic!("face with {n} nodes: only quad4 and tri3 faces"),
+        6 => go(&TRI6, nodes(x0)),
+        n => panic!("face with {n} nodes: only quad4, tri3 and tri6 faces"),
     }
 }
 
@@ -162,6 +165,17 @@ mod tests {
     fn tri() -> Vec<[f64; 3]> {
         vec![[0.1, 0.0, 0.3], [1.2, 0.2, 0.0], [0.3, 0.8, 0.5]]
     }
+    /// The tri above with its midside nodes off the edges: a curved tri6.
+    fn tri6() -> Vec<[f64; 3]> {
+        let c = tri();
+        let mut x = c.clone();
+        for (e, [i, j]) in [[0, 1], [1, 2], [2, 0]].into_iter().enumerate() {
+            x.push(std::array::from_fn(|k| {
+                0.5 * (c[i][k] + c[j][k]) + 0.05 * ((3 * e + k) as f64).sin()
+            }));
+        }
+        x
+    }
     fn wiggle(n: usize, amp: f64) -> Vec<[f64; 3]> {
         (0..n)
             .map(|a| {
@@ -186,7 +200,7 @@ mod tests {
     #[test]
     fn traction_sums_to_t_times_area() {
         let t = [1.5, -2.0, 0.7];
-        for x0 in [warped_quad(), tri()] {
+        for x0 in [warped_quad(), tri(), tri6()] {
             let mut f = vec![0.0; 3 * x0.len()];
             traction_face(&x0, t, &mut f);
             let (s, a) = (sum3(&f), face_area(&x0));
@@ -207,6 +221,18 @@ mod tests {
         let mut f = vec![0.0; 12];
         traction_face(&sq, [0.0, 0.0, 4.0], &mut f);
         assert!(f.chunks_exact(3).all(|fa| (fa[2] - 1.0).abs() < 1e-14));
+        // On a straight-sided tri6 the corners carry nothing and each midside node a third.
+        let c = [[0.0; 3], [2.0, 0.0, 0.0], [0.0, 3.0, 0.0]];
+        let mut t6 = c.to_vec();
+        for [i, j] in [[0, 1], [1, 2], [2, 0]] {
+            t6.push(std::array::from_fn(|k| 0.5 * (c[i][k] + c[j][k])));
+        }
+        let mut f = vec![0.0; 18];
+        traction_face(&t6, [0.0, 0.0, 1.0], &mut f);
+        for (a, fa) in f.chunks_exact(3).enumerate() {
+            let want = if a < 3 { 0.0 } else { 1.0 };
+            assert!((fa[2] - want).abs() < 1e-14, "node {a}: {}", fa[2]);
+        }
     }
 
     #[test]
@@ -261,7 +287,18 @@ mod tests {
             [0.1, 0.9, -0.1],
             [0.2, 0.3, 1.0],
         ];
-        for (kind, x) in [(ElemKind::Hex8, hex), (ElemKind::Tet4, tet)] {
+        // The tet with curved edges as a tet10: its tri6 faces close as well.
+        let mut tet10 = tet.clone();
+        for (e, [i, j]) in crate::fem::shape::TET10_EDGES.into_iter().enumerate() {
+            tet10.push(std::array::from_fn(|k| {
+                0.5 * (tet[i][k] + tet[j][k]) + 0.04 * ((5 * e + 2 * k) as f64).cos()
+            }));
+        }
+        for (kind, x) in [
+            (ElemKind::Hex8, hex),
+            (ElemKind::Tet4, tet),
+            (ElemKind::Tet10, tet10),
+        ] {
             let u = wiggle(x.len(), 0.1);
             let mut total = [0.0; 3];
             for (fi, face) in kind.faces().iter().enumerate() {
@@ -283,7 +320,7 @@ mod tests {
 
     #[test]
     fn pressure_tangent_matches_central_difference() {
-        for x0 in [warped_quad(), tri()] {
+        for x0 in [warped_quad(), tri(), tri6()] {
             let nn = x0.len();
             let n = 3 * nn;
             let u = wiggle(nn, 0.15);

@@ -1,4 +1,4 @@
-//! Structured mesh generators: graded boxes of hex8 or tet4, and interior distortion for
+//! Structured mesh generators: graded boxes of hex8, tet4 or wedge6, and interior distortion for
 //! patch tests.
 
 use super::{ElemKind, FaceRef, Mesh};
@@ -47,6 +47,9 @@ fn cell_template(kind: ElemKind) -> Vec<Vec<usize>> {
                 })
                 .collect()
         }
+        // Two prisms on the base diagonal 0-3 (every cell alike: conforming).
+        ElemKind::Wedge6 => vec![vec![0, 1, 3, 4, 5, 7], vec![0, 3, 2, 4, 7, 6]],
+        ElemKind::Tet10 => unreachable!("box meshes are hex8, tet4 or wedge6"),
     }
 }
 
@@ -201,6 +204,28 @@ const HEX_EDGES: [[usize; 2]; 12] = [
     [2, 6],
     [3, 7],
 ];
+/// Each wedge6 corner with its three neighbours, right-handed (as [`HEX_CORNER_EDGES`]).
+const WEDGE_CORNER_EDGES: [[usize; 4]; 6] = [
+    [0, 1, 2, 3],
+    [1, 2, 0, 4],
+    [2, 0, 1, 5],
+    [3, 5, 4, 0],
+    [4, 3, 5, 1],
+    [5, 4, 3, 2],
+];
+
+const WEDGE_EDGES: [[usize; 2]; 9] = [
+    [0, 1],
+    [1, 2],
+    [2, 0],
+    [3, 4],
+    [4, 5],
+    [5, 3],
+    [0, 3],
+    [1, 4],
+    [2, 5],
+];
+
 const TET_EDGES: [[usize; 2]; 6] = [[0, 1], [0, 2], [0, 3], [1, 2], [1, 3], [2, 3]];
 
 /// (b − a) × (c − a) · (d − a): six times the signed volume of the tet a b c d
@@ -218,7 +243,11 @@ fn min_corner_det(mesh: &Mesh, e: usize) -> f64 {
     let en = mesh.elem_nodes(e);
     let x = |l: usize| mesh.coords[en[l]];
     match mesh.kinds[e] {
-        ElemKind::Tet4 => triple(x(0), x(1), x(2), x(3)),
+        ElemKind::Tet4 | ElemKind::Tet10 => triple(x(0), x(1), x(2), x(3)),
+        ElemKind::Wedge6 => WEDGE_CORNER_EDGES
+            .iter()
+            .map(|&[c, a, b, d]| triple(x(c), x(a), x(b), x(d)))
+            .fold(f64::INFINITY, f64::min),
         ElemKind::Hex8 => HEX_CORNER_EDGES
             .iter()
             .map(|&[c, a, b, d]| triple(x(c), x(a), x(b), x(d)))
@@ -274,7 +303,8 @@ pub fn distort_interior(mesh: &mut Mesh, amount: f64, seed: u64) {
         let en = mesh.elem_nodes(e);
         let edges: &[[usize; 2]] = match mesh.kinds[e] {
             ElemKind::Hex8 => &HEX_EDGES,
-            ElemKind::Tet4 => &TET_EDGES,
+            ElemKind::Tet4 | ElemKind::Tet10 => &TET_EDGES,
+            ElemKind::Wedge6 => &WEDGE_EDGES,
         };
         for &[a, b] in edges {
             let len =
@@ -340,7 +370,9 @@ mod tests {
         let x = |l: usize| mesh.coords[en[l]];
         let tet = |a: usize, b: usize, c: usize, d: usize| triple(x(a), x(b), x(c), x(d)) / 6.0;
         match mesh.kinds[e] {
-            ElemKind::Tet4 => tet(0, 1, 2, 3),
+            ElemKind::Tet4 | ElemKind::Tet10 => tet(0, 1, 2, 3),
+            // The prism's three tets.
+            ElemKind::Wedge6 => tet(0, 1, 2, 5) + tet(0, 1, 5, 4) + tet(0, 4, 5, 3),
             ElemKind::Hex8 => {
                 tet(0, 1, 2, 6)
                     + tet(0, 2, 3, 6)
@@ -441,7 +473,7 @@ mod tests {
 
     #[test]
     fn distortion_keeps_boundary_and_validity() {
-        for kind in [ElemKind::Hex8, ElemKind::Tet4] {
+        for kind in [ElemKind::Hex8, ElemKind::Tet4, ElemKind::Wedge6] {
             for seed in 0..5 {
                 let s = spec(kind, [4, 4, 4], [1.0, 3.0, 1.0]);
                 let m0 = box_mesh(&s, 0);
@@ -467,14 +499,45 @@ mod tests {
                     );
                     total += m.elem_volume(e);
                 }
+                // Tets fill the box exactly; the prisms' quads are not planar once moved.
                 if kind == ElemKind::Tet4 {
-                    assert!((total - 6.0).abs() < 1e-10);
+                    assert!((total - 6.0).abs() < 1e-10, "{kind:?}: {total}");
                 }
                 let mut again = m0.clone();
                 distort_interior(&mut again, 0.3, seed);
                 assert_eq!(again.coords, m.coords, "deterministic");
             }
         }
+    }
+
+    /// Wedge boxes: two prisms a cell, valid and filling the box, each side's faces
+    /// covering it (quads on x and y sides, two triangles a cell on z sides).
+    #[test]
+    fn wedge_box_fills_and_groups_its_sides() {
+        // A graded 2 × 1 × 3 box.
+        let m = box_mesh(&spec(ElemKind::Wedge6, [2, 3, 2], [1.0, 1.5, 0.5]), 0);
+        assert_eq!(m.n_elems(), 24);
+        let total: f64 = (0..m.n_elems())
+            .map(|e| {
+                let v = volume(&m, e);
+                assert!(v > 0.0 && min_corner_det(&m, e) > 0.0, "element {e}");
+                assert!((v - m.elem_volume(e)).abs() < 1e-12);
+                v
+            })
+            .sum();
+        assert!((total - 6.0).abs() < 1e-12);
+        let area = |g: &str| -> f64 {
+            m.face_groups[g]
+                .iter()
+                .map(|f| {
+                    let x: Vec<_> = m.face_nodes(*f).iter().map(|&n| m.coords[n]).collect();
+                    crate::mesh::select::face_area(&x)
+                })
+                .sum()
+        };
+        assert_eq!(m.face_groups["zmin"].len(), 12);
+        assert_eq!(m.face_groups["xmax"].len(), 6);
+        assert!((area("zmax") - 2.0).abs() < 1e-12 && (area("ymin") - 6.0).abs() < 1e-12);
     }
 
     #[test]

@@ -119,6 +119,10 @@ fn elem_type(t: u64) -> Option<(usize, usize)> {
         3 => Some((2, 4)),
         4 => Some((3, 4)),
         5 => Some((3, 8)),
+        6 => Some((3, 6)),
+        8 => Some((1, 3)),
+        9 => Some((2, 6)),
+        11 => Some((3, 10)),
         _ => None,
     }
 }
@@ -389,7 +393,7 @@ fn elements(
                 _ => ("an element block has".to_string(), type_line),
             };
             return Err(format!(
-                "line {line}: {what} {}, which alfe does not read; use first-order hex8 or tet4 volumes, or quad4 sheets (Mesh.ElementOrder = 1)",
+                "line {line}: {what} {}, which alfe does not read; use hex8, tet4, tet10 (Mesh.ElementOrder = 2) or wedge6 volumes, or quad4 sheets",
                 elem_type_name(ty)
             ));
         };
@@ -465,10 +469,11 @@ pub fn read_msh(text: &str, part: u32) -> Result<Mesh, String> {
     let mut elem_groups: BTreeMap<String, Vec<usize>> = BTreeMap::new();
 
     for re in raw.elems.iter().filter(|e| e.dim == 3) {
-        let kind = if re.nn == 8 {
-            ElemKind::Hex8
-        } else {
-            ElemKind::Tet4
+        let kind = match re.nn {
+            8 => ElemKind::Hex8,
+            10 => ElemKind::Tet10,
+            6 => ElemKind::Wedge6,
+            _ => ElemKind::Tet4,
         };
         mesh.push_elem(kind, raw.nodes(re), part);
         let e = mesh.n_elems() - 1;
@@ -494,7 +499,7 @@ pub fn read_msh(text: &str, part: u32) -> Result<Mesh, String> {
         } else {
             ""
         };
-        return Err(format!("mesh file has no hex8 or tet4 volume elements; add a physical volume or set Mesh.SaveAll = 1{hint}"));
+        return Err(format!("mesh file has no hex8, tet4, tet10 or wedge6 volume elements; add a physical volume or set Mesh.SaveAll = 1{hint}"));
     }
 
     let grouped: Vec<&RawElem> = raw
@@ -528,7 +533,7 @@ pub fn read_msh(text: &str, part: u32) -> Result<Mesh, String> {
                 key.sort_unstable();
                 let Some(&f) = faces.get(&key) else {
                     return Err(format!(
-                        "line {}: element {} of physical surface \"{name}\" is not a face of any hex8 or tet4 element",
+                        "line {}: element {} of physical surface \"{name}\" is not a face of any hex8, tet4, tet10 or wedge6 element",
                         re.line, re.tag
                     ));
                 };
@@ -743,6 +748,35 @@ $EndElements
         assert_eq!(m.elem_groups["group9"], vec![0, 1]);
     }
 
+    /// One tet10 (Gmsh node order, tags shuffled) with a tri6 physical surface on its
+    /// face 0-2-1 and a line3 physical curve.
+    const TET10: &str = "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$PhysicalNames\n3\n1 3 \"edge\"\n2 1 \"base\"\n3 2 \"body\"\n$EndPhysicalNames\n$Entities\n0 1 1 1\n1 0 0 0 1 0 0 1 3 0\n1 0 0 0 1 1 0 1 1 0\n1 0 0 0 1 1 1 1 2 0\n$EndEntities\n$Nodes\n1 10 1 10\n3 1 0 10\n1\n2\n3\n4\n5\n6\n7\n8\n9\n10\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n0.5 0 0\n0.5 0.5 0\n0 0.5 0\n0 0 0.5\n0 0.5 0.5\n0.5 0 0.5\n$EndNodes\n$Elements\n3 3 1 3\n1 1 8 1\n1 1 2 5\n2 1 9 1\n2 1 3 2 7 6 5\n3 1 11 1\n3 1 2 3 4 5 6 7 8 9 10\n$EndElements\n";
+
+    #[test]
+    fn reads_tet10_with_tri6_faces() {
+        let m = read_msh(TET10, 0).unwrap();
+        assert_eq!(m.kinds, vec![ElemKind::Tet10]);
+        assert_eq!(m.elem_nodes(0), &[0, 1, 2, 3, 4, 5, 6, 7, 8, 9]);
+        assert!((m.elem_volume(0) - 1.0 / 6.0).abs() < 1e-15);
+        assert_eq!(m.face_groups["base"], vec![FaceRef { elem: 0, face: 0 }]);
+        assert_eq!(
+            m.face_nodes(m.face_groups["base"][0]),
+            vec![0, 2, 1, 6, 5, 4]
+        );
+        assert_eq!(m.node_groups["edge"], vec![0, 1, 4]);
+        assert_eq!(m.node_groups["body"].len(), 10);
+        // Every face's midside nodes sit at the midpoints of its corners.
+        for f in 0..4 {
+            let ns = m.face_nodes(FaceRef { elem: 0, face: f });
+            for k in 0..3 {
+                let (a, b) = (m.coords[ns[k]], m.coords[ns[(k + 1) % 3]]);
+                let mid = m.coords[ns[3 + k]];
+                assert!((0..3).all(|c| (0.5 * (a[c] + b[c]) - mid[c]).abs() < 1e-15));
+            }
+        }
+        assert_eq!(m.boundary_faces().len(), 4);
+    }
+
     #[test]
     fn reads_a_quad_surface_for_a_sheet() {
         let quads = HEXES
@@ -815,13 +849,13 @@ $EndElements
             e.contains("element 5 has node tag 99 that is not in $Nodes"),
             "{e}"
         );
-        let e = err(&HEXES.replace("3 1 5 2", "3 1 11 2"));
+        let e = err(&HEXES.replace("3 1 5 2", "3 1 12 2"));
         assert!(
-            e.contains("element 4 has type 11 (tet10), which alfe does not read"),
+            e.contains("element 4 has type 12 (hex27), which alfe does not read"),
             "{e}"
         );
-        let e = err(&HEXES.replace("3 1 5 2", "3 1 6 2"));
-        assert!(e.contains("type 6 (prism6)"), "{e}");
+        let e = err(&HEXES.replace("3 1 5 2", "3 1 7 2"));
+        assert!(e.contains("type 7 (pyramid5)"), "{e}");
         let e = err(&HEXES.replace("3 13 22 25 16", "3 13 22 40 16"));
         assert!(
             e.contains("element 3 of physical surface \"bottom face\" is not a face"),

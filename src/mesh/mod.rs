@@ -1,4 +1,4 @@
-//! Meshes: nodes, elements (hex8, tet4), named node sets and faces, generators and readers.
+//! Meshes: nodes, elements (hex8, tet4, tet10, wedge6), named node sets and faces, generators and readers.
 //!
 //! A [`Mesh`] is the serial, whole-model mesh that rank 0 builds or reads before it
 //! partitions; ranks receive their pieces through `partition::distribute`.
@@ -7,6 +7,7 @@ pub mod blocks;
 pub mod cylinder;
 pub mod generate;
 pub mod gmsh;
+pub mod quadratic;
 pub mod select;
 pub mod sheet;
 
@@ -19,13 +20,21 @@ use std::collections::BTreeMap;
 pub enum ElemKind {
     Hex8,
     Tet4,
+    Tet10,
+    /// Prism: triangle 0-1-2 (counter-clockwise seen from 3-4-5), 3-4-5 above it.
+    Wedge6,
 }
+
+/// Most nodes of any element kind (the tet10): fixed-size gather buffers.
+pub const MAX_NODES: usize = 10;
 
 impl ElemKind {
     pub fn n_nodes(self) -> usize {
         match self {
             ElemKind::Hex8 => 8,
             ElemKind::Tet4 => 4,
+            ElemKind::Tet10 => 10,
+            ElemKind::Wedge6 => 6,
         }
     }
     /// Local node indices of each face, ordered so the normal (right-hand rule) points
@@ -41,12 +50,38 @@ impl ElemKind {
                 &[3, 0, 4, 7],
             ],
             ElemKind::Tet4 => &[&[0, 2, 1], &[0, 1, 3], &[1, 2, 3], &[0, 3, 2]],
+            // Tri6 faces: the tet4's corners, then the midside nodes of edges c0-c1,
+            // c1-c2, c2-c0 (Gmsh's tri6 order).
+            ElemKind::Tet10 => &[
+                &[0, 2, 1, 6, 5, 4],
+                &[0, 1, 3, 4, 9, 7],
+                &[1, 2, 3, 5, 8, 9],
+                &[0, 3, 2, 7, 8, 6],
+            ],
+            // Two triangles, then the three quads (Gmsh's prism face order).
+            ElemKind::Wedge6 => &[
+                &[0, 2, 1],
+                &[3, 4, 5],
+                &[0, 1, 4, 3],
+                &[1, 2, 5, 4],
+                &[2, 0, 3, 5],
+            ],
         }
     }
     pub fn name(self) -> &'static str {
         match self {
             ElemKind::Hex8 => "hex8",
             ElemKind::Tet4 => "tet4",
+            ElemKind::Tet10 => "tet10",
+            ElemKind::Wedge6 => "wedge6",
+        }
+    }
+    /// The corner nodes of a face (its first 3 or 4 local nodes): what a flat face is.
+    pub fn face_corners(self, face: usize) -> &'static [usize] {
+        let f = self.faces()[face];
+        match self {
+            ElemKind::Tet10 => &f[..3],
+            _ => f,
         }
     }
 }
@@ -158,13 +193,22 @@ impl Mesh {
         out
     }
     /// Signed volume of element e: positive when its node order follows the Gmsh/VTK
-    /// convention. Hex8 uses 2x2x2 Gauss points, exact for trilinear geometry.
+    /// convention. Hex8 uses 2x2x2 Gauss points, exact for trilinear geometry; a tet10
+    /// is measured by its corners (exact when its edges are straight).
     pub fn elem_volume(&self, e: usize) -> f64 {
         let x: Vec<[f64; 3]> = self.elem_nodes(e).iter().map(|&n| self.coords[n]).collect();
         match self.kinds[e] {
-            ElemKind::Tet4 => {
+            ElemKind::Tet4 | ElemKind::Tet10 => {
                 let p = |i: usize| Vector3::from(x[i]);
                 (p(1) - p(0)).cross(&(p(2) - p(0))).dot(&(p(3) - p(0))) / 6.0
+            }
+            // Three tets (exact for planar quad faces).
+            ElemKind::Wedge6 => {
+                let p = |i: usize| Vector3::from(x[i]);
+                let tet = |a: usize, b: usize, c: usize, d: usize| {
+                    (p(b) - p(a)).cross(&(p(c) - p(a))).dot(&(p(d) - p(a))) / 6.0
+                };
+                tet(0, 1, 2, 3) + tet(1, 2, 3, 4) + tet(2, 3, 4, 5)
             }
             ElemKind::Hex8 => {
                 const S: [f64; 8] = [-1.0, 1.0, 1.0, -1.0, -1.0, 1.0, 1.0, -1.0];

@@ -60,18 +60,31 @@ pub fn face_area(x: &[[f64; 3]]) -> f64 {
 }
 
 /// Each node's tributary area on the given faces: every face's area split equally
-/// among its nodes.
+/// among its nodes; a tri6 face is split into its four sub-triangles through the
+/// midside nodes first (corners get a twelfth of a flat face, midside nodes a quarter),
+/// as contact codes treat quadratic segments: the consistent weights ∫N_a dA of a tri6
+/// are zero at its corners, which node-based contact cannot use.
 pub fn tributary_areas<'a>(
     mesh: &Mesh,
     faces: impl IntoIterator<Item = &'a FaceRef>,
 ) -> std::collections::BTreeMap<usize, f64> {
+    const TRI6_SUB: [[usize; 3]; 4] = [[0, 3, 5], [3, 1, 4], [5, 4, 2], [3, 4, 5]];
     let mut area = std::collections::BTreeMap::new();
-    for &f in faces {
-        let nodes = mesh.face_nodes(f);
+    let mut share = |nodes: &[usize]| {
         let x: Vec<[f64; 3]> = nodes.iter().map(|&n| mesh.coords[n]).collect();
         let a = face_area(&x) / nodes.len() as f64;
-        for n in nodes {
+        for &n in nodes {
             *area.entry(n).or_default() += a;
+        }
+    };
+    for &f in faces {
+        let nodes = mesh.face_nodes(f);
+        if nodes.len() == 6 {
+            for sub in TRI6_SUB {
+                share(&sub.map(|i| nodes[i]));
+            }
+        } else {
+            share(&nodes);
         }
     }
     area

@@ -8,6 +8,7 @@
 use super::Model;
 use crate::fem::mass::{consistent_mass, lumped_mass, max_frequency};
 use crate::linalg::matrix::DistMatrix;
+use crate::mesh::MAX_NODES;
 use crate::parallel::Comm;
 use crate::{Error, Result};
 
@@ -35,7 +36,7 @@ pub struct StableStep {
 }
 
 impl Model {
-    fn elem_x0(&self, e: usize, x0: &mut [[f64; 3]; 8]) -> usize {
+    fn elem_x0(&self, e: usize, x0: &mut [[f64; 3]; MAX_NODES]) -> usize {
         let nodes = self.solids.elements.nodes(e);
         for (a, &n) in nodes.iter().enumerate() {
             x0[a] = self.mesh.coords[n];
@@ -52,8 +53,8 @@ impl Model {
     /// mass.
     pub fn lumped_mass(&self, comm: &dyn Comm) -> Vec<f64> {
         let mut m = vec![0.0; self.dofs.n_local_dofs()];
-        let mut x0 = [[0.0; 3]; 8];
-        let mut me = [0.0; 8];
+        let mut x0 = [[0.0; 3]; MAX_NODES];
+        let mut me = [0.0; MAX_NODES];
         for e in 0..self.solids.len() {
             let n = self.elem_x0(e, &mut x0);
             lumped_mass(
@@ -110,8 +111,8 @@ impl Model {
                 let mut vl = Vec::new();
                 self.gather(comm, v, &mut vl);
                 let mut f = vec![0.0; vl.len()];
-                let mut x0 = [[0.0; 3]; 8];
-                let mut me = [0.0; 64];
+                let mut x0 = [[0.0; 3]; MAX_NODES];
+                let mut me = [0.0; MAX_NODES * MAX_NODES];
                 for e in 0..self.solids.len() {
                     let n = self.elem_x0(e, &mut x0);
                     consistent_mass(
@@ -155,10 +156,10 @@ impl Model {
                 }
             }
             MassMatrix::Consistent => {
-                let mut x0 = [[0.0; 3]; 8];
-                let mut me = [0.0; 64];
-                let mut ke = [0.0; 576];
-                let mut blocks = [0usize; 8];
+                let mut x0 = [[0.0; 3]; MAX_NODES];
+                let mut me = [0.0; MAX_NODES * MAX_NODES];
+                let mut ke = [0.0; 9 * MAX_NODES * MAX_NODES];
+                let mut blocks = [0usize; MAX_NODES];
                 for e in 0..self.solids.len() {
                     let n = self.elem_x0(e, &mut x0);
                     consistent_mass(
@@ -202,7 +203,7 @@ impl Model {
         let mut best = (f64::INFINITY, 0.0, 0.0);
         let mut elements = Vec::with_capacity(self.solids.len());
         let mut failure = None;
-        let mut x0 = [[0.0; 3]; 8];
+        let mut x0 = [[0.0; 3]; MAX_NODES];
         let el = &self.solids.elements;
         for e in 0..self.solids.len() {
             let n = self.elem_x0(e, &mut x0);
@@ -264,7 +265,7 @@ impl Model {
     ) -> f64 {
         let mut u_local = Vec::new();
         self.gather(comm, u_owned, &mut u_local);
-        let mut x = [[0.0; 3]; 8];
+        let mut x = [[0.0; 3]; MAX_NODES];
         let mut dt = f64::INFINITY;
         for (e, &(dt_e, t_ref)) in reference.elements.iter().enumerate() {
             let nodes = self.solids.elements.nodes(e);

@@ -154,8 +154,9 @@ impl Contribution for SurfaceLoad {
     }
     fn evaluate(&mut self, ev: &mut Evaluation) -> Result<(), String> {
         let s = self.curve.eval(ev.t);
-        let mut fe = [0.0; 12];
-        let mut ke = [0.0; 144];
+        // Up to a tri6 face.
+        let mut fe = [0.0; 18];
+        let mut ke = [0.0; 324];
         match self.kind {
             SurfaceKind::Traction(t) => {
                 let Some((_, f)) = ev.forces.as_mut() else {

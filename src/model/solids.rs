@@ -13,9 +13,10 @@ use crate::fem::element::kernel;
 use crate::fem::kernel::{ElementData, ElementKernel, ElementOutput};
 use crate::fem::measure::{char_length, von_mises};
 use crate::material::Material;
+use crate::mesh::MAX_NODES;
 
-/// Rows of the largest element: a hybrid hex8's 8 nodes and its pressure block.
-const MAX_DOFS: usize = 27;
+/// Rows of the largest element: its nodes' (a tet10's 10) and a pressure block.
+const MAX_DOFS: usize = 3 * MAX_NODES + 3;
 
 pub struct Solids {
     pub elements: LocalElements,
@@ -123,11 +124,11 @@ impl Solids {
         u_local: &[f64],
         k: &mut crate::linalg::DistMatrix,
     ) {
-        let mut x0 = [[0.0; 3]; 8];
-        let mut ue = [[0.0; 3]; 8];
-        let mut fe = [0.0; 24];
-        let mut ke = vec![0.0; 576];
-        let mut blocks = [0usize; 8];
+        let mut x0 = [[0.0; 3]; MAX_NODES];
+        let mut ue = [[0.0; 3]; MAX_NODES];
+        let mut fe = [0.0; 3 * MAX_NODES];
+        let mut ke = vec![0.0; 9 * MAX_NODES * MAX_NODES];
+        let mut blocks = [0usize; MAX_NODES];
         let mut scratch = Vec::new();
         for e in 0..self.len() {
             let n = self.gather(e, coords, u_local, &mut x0, &mut ue);
@@ -171,8 +172,8 @@ impl Solids {
         e: usize,
         coords: &[[f64; 3]],
         u_local: &[f64],
-        x0: &mut [[f64; 3]; 8],
-        u: &mut [[f64; 3]; 8],
+        x0: &mut [[f64; 3]; MAX_NODES],
+        u: &mut [[f64; 3]; MAX_NODES],
     ) -> usize {
         let nodes = self.elements.nodes(e);
         for (a, &n) in nodes.iter().enumerate() {
@@ -216,8 +217,8 @@ impl Solids {
     /// Volume-averaged Cauchy stress of every local element at `u_local` (NaN where an
     /// element cannot be evaluated).
     pub fn stresses(&self, coords: &[[f64; 3]], u_local: &[f64]) -> Vec<[f64; 6]> {
-        let mut x0 = [[0.0; 3]; 8];
-        let mut ue = [[0.0; 3]; 8];
+        let mut x0 = [[0.0; 3]; MAX_NODES];
+        let mut ue = [[0.0; 3]; MAX_NODES];
         (0..self.len())
             .map(|e| {
                 let n = self.gather(e, coords, u_local, &mut x0, &mut ue);
@@ -282,8 +283,8 @@ impl Contribution for Solids {
     /// the loop.
     fn evaluate(&mut self, ev: &mut Evaluation) -> Result<(), String> {
         let mut failure: Option<String> = None;
-        let mut x0 = [[0.0; 3]; 8];
-        let mut ue = [[0.0; 3]; 8];
+        let mut x0 = [[0.0; 3]; MAX_NODES];
+        let mut ue = [[0.0; 3]; MAX_NODES];
         let mut fe = [0.0; MAX_DOFS];
         let want_k = ev.jacobian.is_some();
         let mut ke = vec![0.0; if want_k { MAX_DOFS * MAX_DOFS } else { 0 }];

@@ -250,36 +250,57 @@ fn write_mesh(comm: &dyn Comm, h5: &H5File, model: &Model) -> Result<(XdmfTopolo
 fn write_connectivity(comm: &dyn Comm, h5: &H5File, model: &Model) -> Result<XdmfTopology> {
     let l = &model.mesh;
     let el = &model.solids.elements;
-    let mut kinds = [0.0, 0.0];
+    // Which kinds are present anywhere: hex8, tet4, tet10, wedge6.
+    let mut kinds = [0.0; 4];
     for k in &el.kinds {
-        kinds[(*k == ElemKind::Tet4) as usize] = 1.0;
+        kinds[match k {
+            ElemKind::Hex8 => 0,
+            ElemKind::Tet4 => 1,
+            ElemKind::Tet10 => 2,
+            ElemKind::Wedge6 => 3,
+        }] = 1.0;
     }
     comm.allreduce_max(&mut kinds);
-    if kinds[0] > 0.0 && kinds[1] > 0.0 {
+    // A tet10's nodes in VTK/XDMF order (its midside nodes of edges 2-3 and 1-3 swap).
+    let out_nodes = |e: usize| -> Vec<i64> {
+        let en = el.nodes(e);
+        let g = |a: usize| l.global_node(en[a]) as i64;
+        match el.kinds[e] {
+            ElemKind::Tet10 => [0, 1, 2, 3, 4, 5, 6, 7, 9, 8].map(g).to_vec(),
+            // VTK's wedge: the first triangle's normal points away from the second.
+            ElemKind::Wedge6 => [0, 2, 1, 3, 5, 4].map(g).to_vec(),
+            _ => (0..en.len()).map(g).collect(),
+        }
+    };
+    // Wedges go out as a mixed array (no uniform wedge topology here).
+    if kinds.iter().filter(|&&k| k > 0.0).count() > 1 || kinds[3] > 0.0 {
         let mut mixed = Vec::new();
         for e in 0..el.len() {
             mixed.push(match el.kinds[e] {
                 ElemKind::Hex8 => 9,
                 ElemKind::Tet4 => 6,
+                ElemKind::Tet10 => super::xdmf::XDMF_TETRAHEDRON_10,
+                ElemKind::Wedge6 => 8,
             });
-            mixed.extend(el.nodes(e).iter().map(|&n| l.global_node(n) as i64));
+            mixed.extend(out_nodes(e));
         }
         let (before, total) = comm.exclusive_scan(mixed.len() as u64);
         h5.write_rows_i64("/mesh/connectivity", total, 1, before, &mixed)?;
         return Ok(XdmfTopology::Mixed { n_entries: total });
     }
-    let npe = if kinds[1] > 0.0 { 4 } else { 8 };
-    let conn: Vec<i64> = (0..el.len())
-        .flat_map(|e| {
-            el.nodes(e)
-                .iter()
-                .map(|&n| l.global_node(n) as i64)
-                .collect::<Vec<_>>()
-        })
-        .collect();
+    let npe = if kinds[2] > 0.0 {
+        10
+    } else if kinds[1] > 0.0 {
+        4
+    } else {
+        8
+    };
+    let conn: Vec<i64> = (0..el.len()).flat_map(out_nodes).collect();
     let (n_elems, start) = (l.n_elems_global as u64, l.elem_start() as u64);
     h5.write_rows_i64("/mesh/connectivity", n_elems, npe, start, &conn)?;
-    Ok(if npe == 4 {
+    Ok(if npe == 10 {
+        XdmfTopology::Tetrahedron10
+    } else if npe == 4 {
         XdmfTopology::Tetrahedron
     } else {
         XdmfTopology::Hexahedron

@@ -9,7 +9,7 @@
 //! Datasets the mesh part refers to, by convention (see [`COORDINATES`],
 //! [`CONNECTIVITY`]): `/mesh/coordinates`, f64 `(n_nodes, 3)`, and
 //! `/mesh/connectivity`, i64 `(n_elems, 8)` for hexahedra, `(n_elems, 4)` for
-//! tetrahedra, or 1-D `(n_entries)` for a mixed mesh (per cell: the XDMF type id,
+//! tetrahedra, `(n_elems, 10)` for quadratic tetrahedra (VTK's node order), or 1-D `(n_entries)` for a mixed mesh (per cell: the XDMF type id,
 //! [`XDMF_HEXAHEDRON`] or [`XDMF_TETRAHEDRON`], then its node ids). Node ids are 0-based.
 
 use crate::{Error, Result};
@@ -25,6 +25,9 @@ pub const CONNECTIVITY: &str = "/mesh/connectivity";
 pub const XDMF_HEXAHEDRON: i64 = 9;
 /// XDMF cell type id of a 4-node tetrahedron in a `Mixed` connectivity array.
 pub const XDMF_TETRAHEDRON: i64 = 6;
+/// XDMF cell type id of a 10-node tetrahedron (`Tetrahedron_10`) in a `Mixed` array.
+/// Its midside nodes are in VTK's order: edges 0-1, 1-2, 2-0, 0-3, 1-3, 2-3.
+pub const XDMF_TETRAHEDRON_10: i64 = 38;
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Center {
@@ -91,6 +94,7 @@ pub struct XdmfStep {
 pub enum XdmfTopology {
     Hexahedron,
     Tetrahedron,
+    Tetrahedron10,
     /// A 1-D mixed connectivity array of `n_entries` integers.
     Mixed {
         n_entries: u64,
@@ -248,6 +252,7 @@ fn mesh_grid(
     let (topo_type, topo_dims) = match mesh.topology {
         XdmfTopology::Hexahedron => ("Hexahedron", dims(mesh.n_elems, 8)),
         XdmfTopology::Tetrahedron => ("Tetrahedron", dims(mesh.n_elems, 4)),
+        XdmfTopology::Tetrahedron10 => ("Tetrahedron_10", dims(mesh.n_elems, 10)),
         XdmfTopology::Mixed { n_entries } => ("Mixed", dims(n_entries, 1)),
     };
     let inner = format!("{pad}          ");

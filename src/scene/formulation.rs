@@ -5,7 +5,7 @@
 
 use super::check::err;
 use super::deck::*;
-use crate::fem::element::{applies, Formulation};
+use crate::fem::element::{applies, describe_for, Formulation};
 use crate::mesh::{ElemKind, Mesh};
 use crate::model::def::*;
 use crate::Result;
@@ -202,13 +202,13 @@ pub(super) fn fit_to_elements(
     };
     let mut warnings = Vec::new();
     let mut pieces = Vec::new();
-    let what_auto = || -> String {
+    let what_auto = |k: ElemKind| -> String {
         let mut q = p.clone();
         q.formulation = FormulationDeck::Auto;
         q.hourglass = None;
         match part_formulation_of(&q, material, f, explicit) {
             Ok(g) if counts.iter().all(|c| applies(c.0, g)) && g != Formulation::Standard => {
-                format!("formulation = \"auto\" (here {})", g.describe())
+                format!("formulation = \"auto\" (here {})", describe_for(k, g))
             }
             _ => "formulation = \"fbar\" or \"hybrid\"".into(),
         }
@@ -222,12 +222,13 @@ pub(super) fn fit_to_elements(
         let mut locks = Vec::new();
         if g == Formulation::Standard && nu > LOCKING_NU {
             locks.push(format!("nu = {nu} > {LOCKING_NU}"));
-            let instead = if applies(k, Formulation::FBAR) && applies(k, Formulation::REDUCED) {
-                format!("use {}", what_auto())
+            let instead = if applies(k, Formulation::FBAR) {
+                format!("use {}", what_auto(k))
             } else {
                 format!(
-                    "{} has no other formulation: mesh the part with hex8 and use \
-                     formulation = \"auto\" (hybrid or F-bar)",
+                    "{} has no other formulation: mesh the part with hex8 or tet10 \
+                     (Gmsh `SetOrder 2`, or element = \"tet10\" on a generated mesh) \
+                     and use formulation = \"auto\" (hybrid)",
                     k.name()
                 )
             };
@@ -236,7 +237,7 @@ pub(super) fn fit_to_elements(
                  {LOCKING_NU} (volumetric locking: forces and stiffness come out too high, \
                  several times over as nu nears 0.5); {instead}",
                 k = k.name(),
-                g = g.describe(),
+                g = describe_for(k, g),
             ));
         }
         if let Some(layers) = sheet {
@@ -249,7 +250,7 @@ pub(super) fn fit_to_elements(
                      reduced hex8); use formulation = \"auto\" or \"eas\" (EAS, the \
                      solid-shell element: within 0.1 %)",
                     k = k.name(),
-                    g = g.describe(),
+                    g = describe_for(k, g),
                 ));
             }
         }
@@ -258,7 +259,7 @@ pub(super) fn fit_to_elements(
         } else {
             format!(" (locks: {})", locks.join("; "))
         };
-        pieces.push((format!("{n} {}", k.name()), g.describe(), locks));
+        pieces.push((format!("{n} {}", k.name()), describe_for(k, g), locks));
     }
     let kinds = pieces
         .iter()

@@ -9,6 +9,7 @@ use super::deck::{BoltDeck, LockAt, PairsDeck, Weights};
 use crate::contact::law::{Threshold, DEFAULT_TANGENTIAL_AUGMENTATION};
 use crate::contact::wall::ContactMethod;
 use crate::mesh::select::tributary_areas;
+use crate::mesh::ElemKind;
 use crate::model::pairing::{mortar_integrals, pair_nodes};
 use crate::model::pairs::{PairsDef, Pretension};
 use crate::Result;
@@ -93,6 +94,27 @@ pub(super) fn build_pairs(decks: &[PairsDeck], ctx: &Context) -> Result<Vec<Pair
         .collect()
 }
 
+/// Issue 35: node-to-surface contact on tri6 faces sees zero corner weights; refused,
+/// never guessed, until tri6 faces have a contact discretization.
+fn refuse_quadratic(
+    f: &str,
+    field: &str,
+    name: &str,
+    mut elems: impl Iterator<Item = usize>,
+    ctx: &Context,
+) -> Result<()> {
+    match elems.find(|&e| ctx.mesh.kinds[e] == ElemKind::Tet10) {
+        Some(e) => Err(err(
+            format!("{f}.{field}"),
+            format!(
+                "`{name}` lies on tet10 elements (part `{}`): contact on tri6 faces is not supported yet",
+                ctx.part_names[ctx.mesh.elem_part[e] as usize]
+            ),
+        )),
+        None => Ok(()),
+    }
+}
+
 fn build_one(d: &PairsDeck, f: &str, ctx: &Context) -> Result<PairsDef> {
     let mesh = ctx.mesh;
     let faces = ctx.surfaces.get(&d.reference).ok_or_else(|| {
@@ -106,6 +128,23 @@ fn build_one(d: &PairsDeck, f: &str, ctx: &Context) -> Result<PairsDef> {
         )
     })?;
     let nodes = ctx.set_nodes(format!("{f}.tracked"), &d.tracked)?;
+    refuse_quadratic(
+        f,
+        "reference",
+        &d.reference,
+        faces.iter().map(|fr| fr.elem),
+        ctx,
+    )?;
+    let mut sorted = nodes.clone();
+    sorted.sort_unstable();
+    let tracked_elems = (0..mesh.n_elems()).filter(|e| {
+        mesh.kinds[*e] == ElemKind::Tet10
+            && mesh
+                .elem_nodes(*e)
+                .iter()
+                .any(|n| sorted.binary_search(n).is_ok())
+    });
+    refuse_quadratic(f, "tracked", &d.tracked, tracked_elems, ctx)?;
     let areas = ctx
         .surfaces
         .get(&d.tracked)

@@ -9,6 +9,7 @@ use crate::fem::measure::check_reference;
 use crate::material::Hardening;
 use crate::mesh::cylinder::{cylinder_mesh, ring_mesh, CylinderSpec, RingSpec};
 use crate::mesh::generate::{box_mesh, distort_interior, BoxSpec};
+use crate::mesh::quadratic::tet4_to_tet10;
 use crate::mesh::{gmsh, ElemKind, Mesh};
 use crate::model::def::*;
 use crate::Result;
@@ -229,7 +230,8 @@ fn box_part(m: &MeshDeck, f: &str, part: u32) -> Result<Mesh> {
     }
     let kind = match element {
         ElementDeck::Hex8 => ElemKind::Hex8,
-        ElementDeck::Tet4 => ElemKind::Tet4,
+        ElementDeck::Tet4 | ElementDeck::Tet10 => ElemKind::Tet4,
+        ElementDeck::Wedge6 => ElemKind::Wedge6,
     };
     let spec = BoxSpec {
         origin: *origin,
@@ -242,7 +244,15 @@ fn box_part(m: &MeshDeck, f: &str, part: u32) -> Result<Mesh> {
     if *distort > 0.0 {
         distort_interior(&mut mesh, *distort, 12345);
     }
-    Ok(mesh)
+    Ok(quadratic_if(*element, mesh))
+}
+
+/// A generated tet4 mesh as tet10 where the deck asks for it.
+fn quadratic_if(element: ElementDeck, mesh: Mesh) -> Mesh {
+    match element {
+        ElementDeck::Tet10 => tet4_to_tet10(&mesh),
+        _ => mesh,
+    }
 }
 
 /// A `ExtrudedQuad` part mesh (see [`part_mesh`]).
@@ -286,7 +296,8 @@ fn extruded_quad_part(m: &MeshDeck, f: &str, part: u32) -> Result<Mesh> {
     }
     let kind = match element {
         ElementDeck::Hex8 => ElemKind::Hex8,
-        ElementDeck::Tet4 => ElemKind::Tet4,
+        ElementDeck::Tet4 | ElementDeck::Tet10 => ElemKind::Tet4,
+        ElementDeck::Wedge6 => ElemKind::Wedge6,
     };
     let spec = BoxSpec {
         origin: [0.0, 0.0, *z0],
@@ -295,7 +306,8 @@ fn extruded_quad_part(m: &MeshDeck, f: &str, part: u32) -> Result<Mesh> {
         grading: [1.0; 3],
         kind,
     };
-    let mut mesh = box_mesh(&spec, part);
+    // Midside nodes before the map, so they follow it.
+    let mut mesh = quadratic_if(*element, box_mesh(&spec, part));
     // Bilinear map: corners 0..3 at (ξ, η) = (0,0), (1,0), (1,1), (0,1).
     for x in &mut mesh.coords {
         let (s, t) = (x[0], x[1]);
@@ -511,7 +523,10 @@ fn gmsh_part(m: &MeshDeck, f: &str, part: u32, deck_dir: &Path) -> Result<Mesh> 
     if mesh.n_elems() == 0 {
         return Err(err(
             format!("{f}.mesh.file"),
-            format!("`{}` has no hex8 or tet4 elements", path.display()),
+            format!(
+                "`{}` has no hex8, tet4, tet10 or wedge6 elements",
+                path.display()
+            ),
         ));
     }
     Ok(mesh)

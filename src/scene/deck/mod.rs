@@ -268,6 +268,10 @@ pub enum ElementDeck {
     #[default]
     Hex8,
     Tet4,
+    /// Tet4 cells with a node at the middle of every edge.
+    Tet10,
+    /// Each cell two prisms (its z-faces split on a diagonal).
+    Wedge6,
 }
 
 #[derive(Debug, Clone, Deserialize, Serialize)]
