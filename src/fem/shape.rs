@@ -69,9 +69,8 @@ pub const fn tet4_dn(_xi: [f64; 3]) -> [[f64; 3]; 4] {
     ]
 }
 
-/// Edges of the tet10 holding its midside nodes 4..9, in Gmsh's order (VTK swaps the
-/// last two: its node 8 is on edge 1-3 and 9 on 2-3).
-pub const TET10_EDGES: [[usize; 2]; 6] = [[0, 1], [1, 2], [2, 0], [0, 3], [2, 3], [1, 3]];
+/// Edges of the tet10 holding its midside nodes 4..9 (the mesh's node convention).
+pub use crate::mesh::TET10_EDGES;
 
 /// Barycentric coordinates L = (1 − ξ − η − ζ, ξ, η, ζ) and their constant gradients.
 const fn tet_bary(xi: [f64; 3]) -> [f64; 4] {

@@ -25,6 +25,10 @@ pub enum ElemKind {
     Wedge6,
 }
 
+/// Edges of the tet10 holding its midside nodes 4..9, in Gmsh's order (VTK swaps the
+/// last two: its node 8 is on edge 1-3 and 9 on 2-3).
+pub const TET10_EDGES: [[usize; 2]; 6] = [[0, 1], [1, 2], [2, 0], [0, 3], [2, 3], [1, 3]];
+
 /// Most nodes of any element kind (the tet10): fixed-size gather buffers.
 pub const MAX_NODES: usize = 10;
 

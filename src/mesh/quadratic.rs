@@ -1,8 +1,7 @@
 //! Quadratic meshes from linear ones: a tet4 mesh with a node at the middle of every
 //! edge becomes a tet10 mesh (Gmsh's `SetOrder 2` on straight edges).
 
-use super::{ElemKind, Mesh};
-use crate::fem::shape::TET10_EDGES;
+use super::{ElemKind, Mesh, TET10_EDGES};
 use std::collections::{BTreeMap, BTreeSet};
 
 /// `m` with every tet4 turned into a tet10: one new node at the midpoint of each edge,
