@@ -3,8 +3,8 @@
 
 mod common;
 use alfe::mesh::generate::{box_mesh, BoxSpec};
-use alfe::mesh::ElemKind;
-use common::{run_deck, temp_dir, try_run_deck};
+use alfe::mesh::{ElemKind, TET10_EDGES};
+use common::{gmsh_text, run_deck, temp_dir, try_run_deck};
 use std::collections::BTreeMap;
 
 /// A `size` block of `cells` (6 tets per cell) as a Gmsh 4.1 tet10 file with physical
@@ -37,12 +37,11 @@ fn tet10_msh(size: [f64; 3], cells: [usize; 3], distort: f64, curve: f64) -> Str
         .map(|(i, x)| wiggle(x, i, distort))
         .collect();
     let mut mid: BTreeMap<(usize, usize), usize> = BTreeMap::new();
-    const EDGES: [[usize; 2]; 6] = [[0, 1], [1, 2], [2, 0], [0, 3], [2, 3], [1, 3]];
     let mut elems = Vec::new();
     for e in 0..m.n_elems() {
         let c = m.elem_nodes(e).to_vec();
         let mut nodes = c.clone();
-        for [i, j] in EDGES {
+        for [i, j] in TET10_EDGES {
             let key = (c[i].min(c[j]), c[i].max(c[j]));
             let id = *mid.entry(key).or_insert_with(|| {
                 // Midway between the moved corners, then off the edge by `curve`.
@@ -68,45 +67,7 @@ fn tet10_msh(size: [f64; 3], cells: [usize; 3], distort: f64, curve: f64) -> Str
             (*g, fs)
         })
         .collect();
-    let mut s = String::from("$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$PhysicalNames\n5\n");
-    for (i, (g, _)) in faces.iter().enumerate() {
-        s += &format!("2 {} \"{g}\"\n", i + 1);
-    }
-    s += "3 9 \"solid\"\n$EndPhysicalNames\n$Entities\n0 0 4 1\n";
-    for i in 1..=4 {
-        s += &format!("{i} 0 0 0 1 1 1 1 {i} 0\n");
-    }
-    s += "1 0 0 0 1 1 1 1 9 0\n$EndEntities\n";
-    let n = coords.len();
-    s += &format!("$Nodes\n1 {n} 1 {n}\n3 1 0 {n}\n");
-    for i in 0..n {
-        s += &format!("{}\n", i + 1);
-    }
-    for c in &coords {
-        s += &format!("{:.17e} {:.17e} {:.17e}\n", c[0], c[1], c[2]);
-    }
-    s += "$EndNodes\n";
-    let nf: usize = faces.iter().map(|f| f.1.len()).sum();
-    let ne = nf + elems.len();
-    s += &format!("$Elements\n5 {ne} 1 {ne}\n");
-    let mut tag = 1;
-    let line = |tag: usize, ns: &[usize]| {
-        let v: Vec<String> = ns.iter().map(|n| (n + 1).to_string()).collect();
-        format!("{tag} {}\n", v.join(" "))
-    };
-    for (i, (_, fs)) in faces.iter().enumerate() {
-        s += &format!("2 {} 9 {}\n", i + 1, fs.len());
-        for f in fs {
-            s += &line(tag, f);
-            tag += 1;
-        }
-    }
-    s += &format!("3 1 11 {}\n", elems.len());
-    for e in &elems {
-        s += &line(tag, e);
-        tag += 1;
-    }
-    s + "$EndElements\n"
+    gmsh_text(&coords, &faces, &elems)
 }
 
 const DECK: &str = r#"

@@ -6,7 +6,7 @@
 mod common;
 use alfe::mesh::generate::{box_mesh, distort_interior, BoxSpec};
 use alfe::mesh::ElemKind;
-use common::{run_deck, temp_dir};
+use common::{gmsh_text, run_deck, temp_dir};
 
 const DECK: &str = r#"
 [scene]
@@ -51,7 +51,8 @@ fn deck(model: &str, nu: f64, mesh: &str, boundary: &str) -> String {
 }
 
 /// The generated wedge block as a Gmsh 4.1 file: prisms (type 6) and the physical
-/// surfaces xmin, xmax, ymin, zmin as tri3 and quad4 blocks of one entity each.
+/// surfaces xmin, xmax, ymin, zmin as tri3 and quad4 blocks of one entity each
+/// ([`gmsh_text`]).
 fn wedge_msh(size: [f64; 3], cells: [usize; 3], distort: f64) -> String {
     let mut m = box_mesh(
         &BoxSpec {
@@ -66,52 +67,17 @@ fn wedge_msh(size: [f64; 3], cells: [usize; 3], distort: f64) -> String {
     if distort > 0.0 {
         distort_interior(&mut m, distort, 12345);
     }
-    let groups = ["xmin", "xmax", "ymin", "zmin"];
-    let mut blocks = Vec::new();
-    for (i, g) in groups.iter().enumerate() {
-        for (ty, nn) in [(2, 3), (3, 4)] {
-            let fs: Vec<Vec<usize>> = m.face_groups[*g]
-                .iter()
-                .map(|f| m.face_nodes(*f))
-                .filter(|f| f.len() == nn)
-                .collect();
-            if !fs.is_empty() {
-                blocks.push((2, i + 1, ty, fs));
-            }
-        }
-    }
+    let surfaces: Vec<(&str, Vec<Vec<usize>>)> = ["xmin", "xmax", "ymin", "zmin"]
+        .iter()
+        .map(|g| {
+            (
+                *g,
+                m.face_groups[*g].iter().map(|f| m.face_nodes(*f)).collect(),
+            )
+        })
+        .collect();
     let elems: Vec<Vec<usize>> = (0..m.n_elems()).map(|e| m.elem_nodes(e).to_vec()).collect();
-    blocks.push((3, 1, 6, elems));
-    let mut s = String::from("$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$PhysicalNames\n5\n");
-    for (i, g) in groups.iter().enumerate() {
-        s += &format!("2 {} \"{g}\"\n", i + 1);
-    }
-    s += "3 9 \"solid\"\n$EndPhysicalNames\n$Entities\n0 0 4 1\n";
-    for i in 1..=4 {
-        s += &format!("{i} 0 0 0 1 1 1 1 {i} 0\n");
-    }
-    s += "1 0 0 0 1 1 1 1 9 0\n$EndEntities\n";
-    let n = m.n_nodes();
-    s += &format!("$Nodes\n1 {n} 1 {n}\n3 1 0 {n}\n");
-    for i in 0..n {
-        s += &format!("{}\n", i + 1);
-    }
-    for c in &m.coords {
-        s += &format!("{:.17e} {:.17e} {:.17e}\n", c[0], c[1], c[2]);
-    }
-    s += "$EndNodes\n";
-    let ne: usize = blocks.iter().map(|b| b.3.len()).sum();
-    s += &format!("$Elements\n{} {ne} 1 {ne}\n", blocks.len());
-    let mut tag = 1;
-    for (dim, entity, ty, es) in &blocks {
-        s += &format!("{dim} {entity} {ty} {}\n", es.len());
-        for e in es {
-            let v: Vec<String> = e.iter().map(|n| (n + 1).to_string()).collect();
-            s += &format!("{tag} {}\n", v.join(" "));
-            tag += 1;
-        }
-    }
-    s + "$EndElements\n"
+    gmsh_text(&m.coords, &surfaces, &elems)
 }
 
 /// Max nodal error against u = (ε x, −ν ε y, −ν ε z), ε = 0.02.

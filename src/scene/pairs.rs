@@ -138,11 +138,9 @@ fn build_one(d: &PairsDeck, f: &str, ctx: &Context) -> Result<PairsDef> {
     let mut sorted = nodes.clone();
     sorted.sort_unstable();
     let tracked_elems = (0..mesh.n_elems()).filter(|e| {
-        mesh.kinds[*e] == ElemKind::Tet10
-            && mesh
-                .elem_nodes(*e)
-                .iter()
-                .any(|n| sorted.binary_search(n).is_ok())
+        mesh.elem_nodes(*e)
+            .iter()
+            .any(|n| sorted.binary_search(n).is_ok())
     });
     refuse_quadratic(f, "tracked", &d.tracked, tracked_elems, ctx)?;
     let areas = ctx

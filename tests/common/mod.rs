@@ -126,3 +126,76 @@ pub fn column(out: &RunOutcome, name: &str) -> Vec<f64> {
         .map(|l| l.split(',').nth(i).unwrap().parse().unwrap())
         .collect()
 }
+
+/// A Gmsh 4.1 ASCII file of volume elements `volumes` (one physical volume "solid") and
+/// physical surfaces (one entity each, a block per face type): element types follow the
+/// node counts (faces: 3 tri3, 4 quad4, 6 tri6; volumes: 4 tet4, 6 prism6, 8 hex8, 10
+/// tet10). Node tags are indices + 1.
+pub fn gmsh_text(
+    coords: &[[f64; 3]],
+    surfaces: &[(&str, Vec<Vec<usize>>)],
+    volumes: &[Vec<usize>],
+) -> String {
+    let face_type = |n: usize| match n {
+        3 => 2,
+        4 => 3,
+        6 => 9,
+        _ => panic!("no Gmsh face of {n} nodes"),
+    };
+    let volume_type = |n: usize| match n {
+        4 => 4,
+        6 => 6,
+        8 => 5,
+        10 => 11,
+        _ => panic!("no Gmsh volume of {n} nodes"),
+    };
+    let mut blocks: Vec<(usize, usize, usize, Vec<&Vec<usize>>)> = Vec::new();
+    for (i, (_, fs)) in surfaces.iter().enumerate() {
+        for nn in [3, 4, 6] {
+            let of: Vec<&Vec<usize>> = fs.iter().filter(|f| f.len() == nn).collect();
+            if !of.is_empty() {
+                blocks.push((2, i + 1, face_type(nn), of));
+            }
+        }
+    }
+    blocks.push((
+        3,
+        1,
+        volume_type(volumes[0].len()),
+        volumes.iter().collect(),
+    ));
+    let ns = surfaces.len();
+    let mut s = format!(
+        "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$PhysicalNames\n{}\n",
+        ns + 1
+    );
+    for (i, (g, _)) in surfaces.iter().enumerate() {
+        s += &format!("2 {} \"{g}\"\n", i + 1);
+    }
+    s += &format!("3 9 \"solid\"\n$EndPhysicalNames\n$Entities\n0 0 {ns} 1\n");
+    for i in 1..=ns {
+        s += &format!("{i} 0 0 0 1 1 1 1 {i} 0\n");
+    }
+    s += "1 0 0 0 1 1 1 1 9 0\n$EndEntities\n";
+    let n = coords.len();
+    s += &format!("$Nodes\n1 {n} 1 {n}\n3 1 0 {n}\n");
+    for i in 0..n {
+        s += &format!("{}\n", i + 1);
+    }
+    for c in coords {
+        s += &format!("{:.17e} {:.17e} {:.17e}\n", c[0], c[1], c[2]);
+    }
+    s += "$EndNodes\n";
+    let ne: usize = blocks.iter().map(|b| b.3.len()).sum();
+    s += &format!("$Elements\n{} {ne} 1 {ne}\n", blocks.len());
+    let mut tag = 1;
+    for (dim, entity, ty, es) in &blocks {
+        s += &format!("{dim} {entity} {ty} {}\n", es.len());
+        for e in es {
+            let v: Vec<String> = e.iter().map(|n| (n + 1).to_string()).collect();
+            s += &format!("{tag} {}\n", v.join(" "));
+            tag += 1;
+        }
+    }
+    s + "$EndElements\n"
+}
