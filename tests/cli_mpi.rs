@@ -544,6 +544,30 @@ fn tet10_seal_with_a_frictional_wall_same_on_one_and_two_ranks() {
     same_on_one_and_two(&dir, Ranks::deck("seal.toml", "seal").within(1e-6));
 }
 
+/// The seal as coarse tet4 under `auto`, the F-bar patch: the patches are formed before
+/// partitioning and kept whole on one rank, so 2 ranks give the 1-rank answers.
+#[test]
+fn fbar_patch_tet4_seal_same_on_one_and_two_ranks() {
+    let dir = temp_dir("rank-tet4-seal");
+    let text =
+        std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/tests/seal.toml")).unwrap();
+    let deck = edit(
+        &edit(
+            &edit(
+                &text,
+                "cells = [16, 8, 8], element = \"hex8\"",
+                "cells = [8, 4, 4], element = \"tet4\"",
+            ),
+            "end_time = 2.0",
+            "end_time = 1.4",
+        ),
+        "step = 0.1",
+        "step = 0.2",
+    );
+    std::fs::write(dir.join("seal.toml"), deck).unwrap();
+    same_on_one_and_two(&dir, Ranks::deck("seal.toml", "seal").within(1e-6));
+}
+
 /// GMRES + block Jacobi on 2 ranks, ≥ 50k unknowns, to the asked tolerance on the
 /// true residual ‖b − Ax‖/‖b‖ recomputed after the solve.
 #[test]

@@ -52,18 +52,19 @@ step = 1.0
     )
 }
 
-/// Every formulation but standard on a tet4 part is refused, naming the part and field;
-/// `standard` and `auto` are accepted.
+/// EAS and reduced on a tet4 part are refused, naming the part and field; `standard`,
+/// `fbar` (the F-bar patch), `hybrid` (with a pressure per patch) and `auto` are
+/// accepted.
 #[test]
 fn a_formulation_that_does_not_apply_to_tet4_is_an_error() {
     let dir = temp_dir("tet4-formulations");
-    for form in ["hybrid", "fbar", "eas", "reduced"] {
+    for form in ["eas", "reduced"] {
         let e = check(&dir, &block("tet4", 0.3, Some(form)))
             .expect_err(form)
             .to_string();
         assert!(
             e.contains(&format!(
-                "parts[0].formulation: \"{form}\" does not apply to tet4 elements (part `block`: its 96 elements are tet4); tet4 has only the standard formulation"
+                "parts[0].formulation: \"{form}\" does not apply to tet4 elements (part `block`: its 96 elements are tet4); tet4 has only the standard, fbar, hybrid formulations; set formulation = \"auto\" or \"standard\""
             )),
             "{form}: {e}"
         );
@@ -73,6 +74,21 @@ fn a_formulation_that_does_not_apply_to_tet4_is_an_error() {
         assert!(s.contains("\n    block: 96 tet4, standard\n"), "{s}");
         assert!(!s.contains("warning"), "{s}");
     }
+    let s = check(&dir, &block("tet4", 0.3, Some("fbar"))).unwrap();
+    assert!(
+        s.contains("\n    block: 96 tet4, F-bar patch (8 tets share one volume ratio)\n"),
+        "{s}"
+    );
+    let s = check(&dir, &block("tet4", 0.3, Some("hybrid"))).unwrap();
+    assert!(
+        s.contains("\n    block: 96 tet4, hybrid F-bar patch (8 tets share one volume ratio and a pressure unknown)\n"),
+        "{s}"
+    );
+    // 12 patches of 8: 12 pressure blocks.
+    assert!(
+        s.contains("36 element pressure blocks (12 pressures)"),
+        "{s}"
+    );
     // An hourglass spring under auto on a tet4 part has no element to act on.
     let e = check(
         &dir,
@@ -90,13 +106,19 @@ fn a_formulation_that_does_not_apply_to_tet4_is_an_error() {
     );
 }
 
-/// A nearly incompressible tet4 part under auto: check says "tet4, standard" (not the
-/// hybrid hex8 it used to claim) and warns; hex8 under auto is hybrid and quiet; hex8
-/// with `standard` warns.
+/// A nearly incompressible tet4 part under auto is the hybrid F-bar patch and quiet; with
+/// `standard` check says "tet4, standard", warns and names auto's choice; hex8 under
+/// auto is hybrid and quiet; hex8 with `standard` warns.
 #[test]
 fn nearly_incompressible_standard_elements_warn_in_check() {
     let dir = temp_dir("locking-check");
     let s = check(&dir, &block("tet4", 0.4995, None)).unwrap();
+    assert!(
+        s.contains("\n    block: 96 tet4, hybrid F-bar patch (8 tets share one volume ratio and a pressure unknown)\n"),
+        "{s}"
+    );
+    assert!(!s.contains("warning"), "{s}");
+    let s = check(&dir, &block("tet4", 0.4995, Some("standard"))).unwrap();
     assert!(
         s.contains("\n    block: 96 tet4, standard (locks: nu = 0.4995 > 0.45)\n"),
         "{s}"
@@ -106,7 +128,7 @@ fn nearly_incompressible_standard_elements_warn_in_check() {
         "{s}"
     );
     assert!(
-        s.contains("tet4 has no other formulation: mesh the part with hex8"),
+        s.contains("use formulation = \"auto\" (here hybrid F-bar patch (8 tets share one volume ratio and a pressure unknown))"),
         "{s}"
     );
     let s = check(&dir, &block("hex8", 0.4995, None)).unwrap();
@@ -134,7 +156,7 @@ fn nearly_incompressible_standard_elements_warn_in_check() {
 #[test]
 fn a_locking_choice_is_warned_in_the_run_log() {
     let name = "locking-run";
-    let out = run_deck(name, &block("tet4", 0.4995, None));
+    let out = run_deck(name, &block("tet4", 0.4995, Some("standard")));
     drop(out);
     let dir = std::env::temp_dir().join(format!("alfe-test-{}-{name}", std::process::id()));
     let log = std::fs::read_to_string(dir.join("out").join("log.txt")).unwrap();

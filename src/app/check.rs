@@ -41,13 +41,19 @@ fn describe(def: &ModelDef, run: &RunSettings) -> String {
         .iter()
         .map(|c| c.kind().extra_unknowns())
         .sum();
-    // A hybrid element's pressure takes a block of three unknowns (one used).
-    let hybrid = (0..m.n_elems())
+    // A hybrid element's pressure takes a block of three unknowns (one used), and so
+    // does a hybrid tet4 patch's.
+    let hybrid_elements = (0..m.n_elems())
         .filter(|&e| {
-            let form = def.part_formulation[m.elem_part[e] as usize];
+            let form = def.elem_formulation(e);
             form.is_hybrid() && crate::fem::element::kernel(m.kinds[e], form).own_blocks() > 0
         })
         .count();
+    let hybrid_patches: std::collections::BTreeSet<u32> = (0..m.n_elems())
+        .filter(|&e| def.elem_formulation(e).is_hybrid())
+        .filter_map(|e| def.elem_patch.get(e).copied().filter(|&p| p != u32::MAX))
+        .collect();
+    let hybrid = hybrid_elements + hybrid_patches.len();
     let mut parts_of = Vec::new();
     if extra > 0 {
         parts_of.push(format!("{extra} multipliers and reference-point DOFs"));

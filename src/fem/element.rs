@@ -98,26 +98,59 @@ impl Formulation {
     }
 }
 
-/// Whether `form` is a formulation of `kind`: hex8 has them all; tet4 only the standard
-/// one-point element (F-bar's J̄ is its own J, and it has no EAS, reduced or hybrid
-/// kernel). The deck refuses a formulation that does not apply (`scene/parts.rs`); a
-/// new element type adds its arm here and in [`kernel`].
+/// Whether `form` is a formulation of `kind`: hex8 has them all; tet4 the standard
+/// one-point element, F-bar, which on a tet4 is the F-bar patch ([`super::patch`]: a
+/// tet's own J̄ would be its J), and hybrid, the F-bar patch with a pressure unknown per
+/// patch; tet10 and wedge6 standard, F-bar and hybrid (the mean-dilatation element). The deck refuses a formulation that does not apply
+/// (`scene/formulation.rs`); a new element type adds its arm here and in [`kernel`].
 pub fn applies(kind: ElemKind, form: Formulation) -> bool {
     match kind {
         ElemKind::Hex8 => true,
-        ElemKind::Tet4 => form == Formulation::Standard,
-        // F-bar and hybrid are the mean-dilatation element ([`kernel`]).
-        ElemKind::Tet10 | ElemKind::Wedge6 => matches!(
+        // F-bar and hybrid are the mean-dilatation element on tet10 and wedge6 ([`kernel`]),
+        // the F-bar patch on tet4.
+        ElemKind::Tet4 | ElemKind::Tet10 | ElemKind::Wedge6 => matches!(
             form,
             Formulation::Standard | Formulation::FBar { .. } | Formulation::Hybrid { .. }
         ),
     }
 }
 
+/// The formulation an element of `kind` takes in a part whose formulation is `form`:
+/// `form` where it applies; else hybrid's nearest, F-bar, where that applies (a tet4 in
+/// a hybrid part is an F-bar-patch tet); else the standard element. A part that names a
+/// formulation has been checked to apply to all its types; this serves `auto`.
+pub fn for_kind(kind: ElemKind, form: Formulation) -> Formulation {
+    if applies(kind, form) {
+        form
+    } else if form.is_hybrid() && applies(kind, Formulation::FBAR) {
+        Formulation::FBAR
+    } else {
+        Formulation::Standard
+    }
+}
+
+/// Whether an element of `kind` under `form` is evaluated in an F-bar patch with its
+/// neighbours ([`super::patch`]) rather than alone.
+pub fn in_patch(kind: ElemKind, form: Formulation) -> bool {
+    kind == ElemKind::Tet4
+        && matches!(
+            for_kind(kind, form),
+            Formulation::FBar { .. } | Formulation::Hybrid { .. }
+        )
+}
+
 /// [`Formulation::describe`] as an element of `kind` gets it: F-bar and hybrid tet10 are
 /// the mean-dilatation element, its pressure condensed or an unknown.
 pub fn describe_for(kind: ElemKind, form: Formulation) -> String {
     match (kind, form) {
+        (ElemKind::Tet4, Formulation::FBar { .. }) => format!(
+            "F-bar patch ({} tets share one volume ratio)",
+            crate::mesh::patches::PATCH_ELEMENTS
+        ),
+        (ElemKind::Tet4, Formulation::Hybrid { .. }) => format!(
+            "hybrid F-bar patch ({} tets share one volume ratio and a pressure unknown)",
+            crate::mesh::patches::PATCH_ELEMENTS
+        ),
         (ElemKind::Tet10, Formulation::FBar { .. }) => {
             "mean dilatation (P2/P0, pressure condensed)".into()
         }
@@ -136,10 +169,10 @@ pub fn describe_for(kind: ElemKind, form: Formulation) -> String {
 
 /// The kernel of an element of `kind` under `form`.
 ///
-/// Only hex8 tells the formulations apart. A tet4 is the standard one-point element: the
-/// deck refuses any other formulation on a tet4 part ([`applies`]), and a part that mixes
-/// hex8 and tet4 under `formulation = "auto"` gives its hex8 auto's choice and its tet4
-/// this one (`alfe check` prints both, and warns when the tet4 lock).
+/// A tet4 is the standard one-point element here under any formulation: under F-bar the
+/// model evaluates it with its patch ([`in_patch`], [`super::patch`]), and this kernel
+/// only says its point count. A part that mixes hex8 and tet4 under `auto` gives each
+/// type [`for_kind`]'s choice (`alfe check` prints both, and warns when one locks).
 pub fn kernel(kind: ElemKind, form: Formulation) -> Box<dyn ElementKernel> {
     match (kind, form) {
         (ElemKind::Hex8, Formulation::Standard) => Box::new(Standard { tab: &HEX8 }),
@@ -192,8 +225,9 @@ pub fn element_stress(
 mod tests {
     use super::*;
 
-    /// hex8 has every formulation; tet4 only the standard one (the deck refuses the
-    /// rest), and describe() names the formulation alone.
+    /// hex8 has every formulation; tet4, tet10 and wedge6 standard, F-bar and hybrid (the
+    /// deck refuses the rest); describe() names the formulation alone; `auto`'s choice
+    /// falls back per type and puts F-bar and hybrid tet4 in patches.
     #[test]
     fn formulations_apply_to_the_element_types_that_have_them() {
         for f in [
@@ -204,8 +238,16 @@ mod tests {
             Formulation::Hybrid { hourglass: 0.0 },
         ] {
             assert!(applies(ElemKind::Hex8, f));
-            assert_eq!(applies(ElemKind::Tet4, f), f == Formulation::Standard);
-            for k in [ElemKind::Tet10, ElemKind::Wedge6] {
+            assert_eq!(for_kind(ElemKind::Hex8, f), f);
+            assert_eq!(
+                in_patch(ElemKind::Tet4, f),
+                matches!(f, Formulation::FBar { .. } | Formulation::Hybrid { .. })
+            );
+            assert!(!in_patch(ElemKind::Hex8, f) && !in_patch(ElemKind::Tet10, f));
+            for k in [ElemKind::Tet4, ElemKind::Tet10, ElemKind::Wedge6] {
+                if !applies(k, f) {
+                    assert_eq!(for_kind(k, f), Formulation::Standard);
+                }
                 assert_eq!(
                     applies(k, f),
                     !matches!(f, Formulation::Reduced { .. } | Formulation::Eas)

@@ -9,6 +9,7 @@ pub mod kernel;
 pub mod kinematics;
 pub mod mass;
 pub mod measure;
+pub mod patch;
 pub mod reduced;
 pub mod shape;
 pub mod solid;

@@ -52,12 +52,13 @@ pub const REGULARIZATION: f64 = 1e-6;
 const MAX_NEIGHBOURS: usize = 4;
 /// ... or, for a row marked as an element's own ([`LocalBlockPattern::element_rows`]: a
 /// hybrid element's pressure block), up to its nodes (those this block holds: 8 for a
-/// hex8, 10 for a tet10, 6 for a wedge6). Only marked rows: a corner node of a hex mesh
+/// hex8, 10 for a tet10, 6 for a wedge6, the union of a hybrid tet4 patch's, about 15
+/// for 8 tets and rarely above 30). Only marked rows: a corner node of a hex mesh
 /// that a rigid body also couples to has 8 mutually coupled neighbours too, and is no
 /// algebraic unknown (eliminating it would only perturb the factor by δ). Marked rows are
 /// not regularized: their D is definite. (At 8, tet10 pressure blocks stayed in the
 /// factored matrix: the seal's LU cost 3.3× hex8's on the same nodes.)
-const ELEMENT_NEIGHBOURS: usize = crate::mesh::MAX_NODES;
+const ELEMENT_NEIGHBOURS: usize = 48;
 
 /// One attached block row `m`: its diagonal entry and its neighbours
 /// (`nbrs[nb.clone()]`), whose mutual entries are the fill of its elimination.

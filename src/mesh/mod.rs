@@ -7,6 +7,7 @@ pub mod blocks;
 pub mod cylinder;
 pub mod generate;
 pub mod gmsh;
+pub mod patches;
 pub mod quadratic;
 pub mod select;
 pub mod sheet;

@@ -171,6 +171,10 @@ pub struct ModelDef {
     pub contributions: Vec<ContributionDef>,
     /// How the elements are split over ranks.
     pub partition: crate::partition::Method,
+    /// Element → F-bar patch (`mesh::patches`; `u32::MAX`: none; empty: no patches).
+    #[serde(default)]
+    /// The partition keeps each patch on one rank.
+    pub elem_patch: Vec<u32>,
 }
 
 impl ModelDef {
@@ -178,8 +182,13 @@ impl ModelDef {
     pub fn elem_material(&self, e: usize) -> usize {
         self.part_material[self.mesh.elem_part[e] as usize]
     }
+    /// Element e's formulation: its part's, as its element type takes it
+    /// ([`crate::fem::element::for_kind`]).
     pub fn elem_formulation(&self, e: usize) -> Formulation {
-        self.part_formulation[self.mesh.elem_part[e] as usize]
+        crate::fem::element::for_kind(
+            self.mesh.kinds[e],
+            self.part_formulation[self.mesh.elem_part[e] as usize],
+        )
     }
     /// What its partition is computed from, with its `edges` ([`Self::coupling_edges`]).
     pub fn partition_request<'a>(
@@ -190,6 +199,7 @@ impl ModelDef {
             mesh: &self.mesh,
             edges,
             method: self.partition,
+            groups: &self.elem_patch,
         }
     }
     /// The element couplings of the contributions' stencils (partition graph edges).

@@ -35,6 +35,8 @@ pub struct LocalModel {
 /// Build every rank's piece from the whole model and an element partition.
 pub fn split(def: &ModelDef, part: &[u32], ranks: usize) -> Vec<LocalModel> {
     let mesh = &def.mesh;
+    // A partition read from a file or computed without the patches keeps them whole too.
+    let part = &whole_patches(part, &def.elem_patch)[..];
     let owner = node_owner(mesh, part);
     let mut owned_nodes_per_rank = vec![0usize; ranks];
     for &o in &owner {
@@ -114,6 +116,7 @@ pub fn split(def: &ModelDef, part: &[u32], ranks: usize) -> Vec<LocalModel> {
             elements.part.push(mesh.elem_part[e]);
             local_elem.insert(e, le);
         }
+        elements.patch = local_patches(&def.elem_patch, &elems_of[r]);
         let node_sets = def
             .node_sets
             .iter()
@@ -174,6 +177,32 @@ pub fn split(def: &ModelDef, part: &[u32], ranks: usize) -> Vec<LocalModel> {
         }
     }
     out
+}
+
+/// The partition with every F-bar patch on one rank.
+fn whole_patches(part: &[u32], elem_patch: &[u32]) -> Vec<u32> {
+    let mut part = part.to_vec();
+    crate::partition::keep_groups_whole(&mut part, elem_patch);
+    part
+}
+
+/// The patches of a rank's elements, numbered densely in element order (`u32::MAX`:
+/// none; empty: the model has no patches).
+fn local_patches(elem_patch: &[u32], elems: &[usize]) -> Vec<u32> {
+    if elem_patch.is_empty() {
+        return Vec::new();
+    }
+    let mut local: BTreeMap<u32, u32> = BTreeMap::new();
+    elems
+        .iter()
+        .map(|&e| match elem_patch[e] {
+            u32::MAX => u32::MAX,
+            g => {
+                let next = local.len() as u32;
+                *local.entry(g).or_insert(next)
+            }
+        })
+        .collect()
 }
 
 /// Collective: rank 0 passes `Some(pieces)` (one per rank), every rank gets its own.

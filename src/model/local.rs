@@ -75,6 +75,10 @@ pub struct LocalElements {
     /// Part index (deck order) of each element.
     #[serde(default)]
     pub part: Vec<u32>,
+    /// The F-bar patch of each element, numbered densely on this rank (`u32::MAX`:
+    /// none; empty: no patches). A patch's elements are all on one rank.
+    #[serde(default)]
+    pub patch: Vec<u32>,
 }
 
 impl LocalElements {

@@ -18,6 +18,7 @@ pub mod local;
 pub mod mat3;
 pub mod pairing;
 pub mod pairs;
+pub mod solid_patches;
 pub mod solids;
 pub mod walls;
 

@@ -9,6 +9,7 @@ use super::contribution::{
 use super::def::MaterialDef;
 use super::distribute::LocalElements;
 use super::dofs::{DofMap, Unknowns};
+use super::solid_patches::{Patches, Scratch};
 use crate::fem::element::kernel;
 use crate::fem::kernel::{ElementData, ElementKernel, ElementOutput};
 use crate::fem::measure::{char_length, von_mises};
@@ -43,6 +44,11 @@ pub struct Solids {
     n_own: usize,
     /// Local block of the first element's first own block (set by `bind`).
     own_first: usize,
+    /// The F-bar patches of tet4 (evaluated patch by patch, not element by element);
+    /// hybrid patches' pressure blocks follow the elements' own blocks.
+    patches: Patches,
+    /// How many own blocks the elements carry (the patches' come after).
+    n_own_elements: usize,
 }
 
 impl Solids {
@@ -77,6 +83,9 @@ impl Solids {
             n_own += k.own_blocks();
         }
         state_offset.push(s);
+        let patches = Patches::new(&elements);
+        let n_own_elements = n_own;
+        let n_own = n_own + patches.n_own();
         Self {
             elements,
             materials: built,
@@ -91,7 +100,22 @@ impl Solids {
             own_index,
             n_own,
             own_first: 0,
+            patches,
+            n_own_elements,
         }
+    }
+
+    /// Patch i's pressure block (local block index), if it is hybrid.
+    fn patch_block(&self, i: usize) -> Option<usize> {
+        self.patches.list[i]
+            .own
+            .map(|o| self.own_first + self.n_own_elements + o)
+    }
+
+    /// Patch i's pressure block values from `u`, if it is hybrid.
+    fn patch_pi<'u>(&self, i: usize, u: &'u [f64]) -> Option<&'u [f64; 3]> {
+        self.patch_block(i)
+            .map(|b| u[3 * b..3 * b + 3].try_into().expect("a block of three"))
     }
 
     /// Element e's kernel.
@@ -130,7 +154,7 @@ impl Solids {
         let mut ke = vec![0.0; 9 * MAX_NODES * MAX_NODES];
         let mut blocks = [0usize; MAX_NODES];
         let mut scratch = Vec::new();
-        for e in 0..self.len() {
+        for e in (0..self.len()).filter(|&e| !self.patches.member[e]) {
             let n = self.gather(e, coords, u_local, &mut x0, &mut ue);
             let mat = self.materials[self.elements.material[e] as usize].as_ref();
             let (s0, s1) = (self.state_offset[e], self.state_offset[e + 1]);
@@ -145,6 +169,22 @@ impl Solids {
                     blocks[a] = dofs.global_block(node);
                 }
                 k.add_element(&blocks[..n], &ke[..9 * n * n]);
+            }
+        }
+        let mut s = Scratch::default();
+        let mut trial = self.state_old.clone();
+        for i in 0..self.patches.len() {
+            let p = &self.patches.list[i];
+            let history = (&self.state_old[..], &self.state_offset[..], &mut trial[..]);
+            let mat = self.material(p.elems[0]);
+            let orig = &self.elements.orig;
+            if self
+                .patches
+                .force(i, &mut s, coords, u_local, mat, None, history, orig, true)
+                .is_ok()
+            {
+                let blocks: Vec<usize> = p.nodes.iter().map(|&n| dofs.global_block(n)).collect();
+                k.add_element(&blocks, &s.k);
             }
         }
     }
@@ -219,15 +259,27 @@ impl Solids {
     pub fn stresses(&self, coords: &[[f64; 3]], u_local: &[f64]) -> Vec<[f64; 6]> {
         let mut x0 = [[0.0; 3]; MAX_NODES];
         let mut ue = [[0.0; 3]; MAX_NODES];
-        (0..self.len())
+        let mut out: Vec<[f64; 6]> = (0..self.len())
             .map(|e| {
+                if self.patches.member[e] {
+                    return [f64::NAN; 6];
+                }
                 let n = self.gather(e, coords, u_local, &mut x0, &mut ue);
                 let (ob, no) = self.own_blocks(e);
                 let data = ElementData::new(&x0[..n], &ue[..n], self.material(e), self.history(e))
                     .with_own(&u_local[3 * ob..3 * (ob + no)]);
                 self.kernel(e).stress(&data).unwrap_or([f64::NAN; 6])
             })
-            .collect()
+            .collect();
+        let mut s = Scratch::default();
+        for i in 0..self.patches.len() {
+            let mat = self.material(self.patches.list[i].elems[0]);
+            let history = (&self.state_old[..], &self.state_offset[..]);
+            let pi = self.patch_pi(i, u_local).map(|b| b[0]);
+            self.patches
+                .stresses(i, &mut s, coords, u_local, mat, pi, history, &mut out);
+        }
+        out
     }
 
     /// Sum of the characteristic lengths of the local elements.
@@ -259,6 +311,14 @@ impl Contribution for Solids {
     }
 
     fn pattern(&self, dofs: &DofMap, out: &mut Vec<(usize, usize)>) {
+        for (i, p) in self.patches.list.iter().enumerate() {
+            let blocks: Vec<usize> = p.nodes.iter().copied().chain(self.patch_block(i)).collect();
+            for &a in &blocks {
+                for &b in &blocks {
+                    out.push((dofs.global_block(a), dofs.global_block(b)));
+                }
+            }
+        }
         for e in 0..self.len() {
             let nodes = self.elements.nodes(e);
             for &a in nodes {
@@ -278,9 +338,9 @@ impl Contribution for Solids {
         }
     }
 
-    /// One loop over the local elements: internal forces and/or element tangents. The
-    /// first element that cannot be evaluated (an inverted element) is reported after
-    /// the loop.
+    /// One loop over the local elements (internal forces and/or element tangents), then
+    /// one over the F-bar patches. The first element that cannot be evaluated (an
+    /// inverted element) is reported after the loops.
     fn evaluate(&mut self, ev: &mut Evaluation) -> Result<(), String> {
         let mut failure: Option<String> = None;
         let mut x0 = [[0.0; 3]; MAX_NODES];
@@ -290,6 +350,9 @@ impl Contribution for Solids {
         let mut ke = vec![0.0; if want_k { MAX_DOFS * MAX_DOFS } else { 0 }];
         let mut blocks = [0usize; MAX_DOFS / 3];
         for e in 0..self.len() {
+            if self.patches.member[e] {
+                continue;
+            }
             let n = self.gather(e, ev.coords, ev.u, &mut x0, &mut ue);
             let mat = self.materials[self.elements.material[e] as usize].as_ref();
             let (s0, s1) = (self.state_offset[e], self.state_offset[e + 1]);
@@ -320,20 +383,34 @@ impl Contribution for Solids {
             for (b, p) in (ob..ob + no).enumerate() {
                 blocks[n + b] = p;
             }
-            let blocks = &mut blocks[..n + no];
-            if let Some((f, _)) = ev.forces.as_mut() {
-                for (&block, fa) in blocks.iter().zip(fe.chunks_exact(3)) {
-                    for c in 0..3 {
-                        f[3 * block + c] += fa[c];
-                    }
-                }
+            let k = want_k.then(|| &ke[..nd * nd]);
+            scatter(ev, &mut blocks[..n + no], &fe[..nd], k);
+        }
+        let mut s = Scratch::default();
+        let mut pblocks = Vec::new();
+        for i in 0..self.patches.len() {
+            let p = &self.patches.list[i];
+            let mat = self.materials[self.elements.material[p.elems[0]] as usize].as_ref();
+            let history = (
+                &self.state_old[..],
+                &self.state_offset[..],
+                &mut self.state_new[..],
+            );
+            let orig = &self.elements.orig;
+            let own = p.own.map(|o| self.own_first + self.n_own_elements + o);
+            let pi: Option<&[f64; 3]> =
+                own.map(|b| ev.u[3 * b..3 * b + 3].try_into().expect("a block of three"));
+            let res = self
+                .patches
+                .force(i, &mut s, ev.coords, ev.u, mat, pi, history, orig, want_k);
+            if let Err(err) = res {
+                failure.get_or_insert(err);
+                continue;
             }
-            if let Some(k) = ev.jacobian.as_deref_mut() {
-                for b in blocks.iter_mut() {
-                    *b = ev.dofs.global_block(*b);
-                }
-                k.add_element(blocks, &ke[..nd * nd]);
-            }
+            pblocks.clear();
+            pblocks.extend_from_slice(&p.nodes);
+            pblocks.extend(own);
+            scatter(ev, &mut pblocks, &s.f, want_k.then_some(&s.k[..]));
         }
         self.evaluations += self.len() as u64;
         match failure {
@@ -368,6 +445,24 @@ impl Contribution for Solids {
     }
     fn explicit(&mut self) -> Option<&mut dyn Explicit> {
         Some(self)
+    }
+}
+
+/// Add one element's (or patch's) rows to the residual and its matrix to the Jacobian;
+/// `blocks` are local blocks, turned into global ones for the matrix.
+fn scatter(ev: &mut Evaluation, blocks: &mut [usize], fe: &[f64], ke: Option<&[f64]>) {
+    if let Some((f, _)) = ev.forces.as_mut() {
+        for (&block, fa) in blocks.iter().zip(fe.chunks_exact(3)) {
+            for c in 0..3 {
+                f[3 * block + c] += fa[c];
+            }
+        }
+    }
+    if let (Some(k), Some(ke)) = (ev.jacobian.as_deref_mut(), ke) {
+        for b in blocks.iter_mut() {
+            *b = ev.dofs.global_block(*b);
+        }
+        k.add_element(blocks, ke);
     }
 }
 

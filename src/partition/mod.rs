@@ -40,19 +40,27 @@ pub struct Request<'a> {
     pub mesh: &'a Mesh,
     pub edges: &'a [(usize, usize)],
     pub method: Method,
+    /// Element → group that must stay on one rank ([`NO_GROUP`]: none; empty: no
+    /// groups), see [`keep_groups_whole`].
+    pub groups: &'a [u32],
 }
+
+/// An element in no group.
+pub const NO_GROUP: u32 = u32::MAX;
 
 impl Request<'_> {
     /// The partition over `ranks`.
     pub fn compute(&self, ranks: usize) -> Result<Vec<u32>> {
-        partition_elements(self.mesh, ranks, self.method, self.edges)
+        let mut part = partition_elements(self.mesh, ranks, self.method, self.edges)?;
+        keep_groups_whole(&mut part, self.groups);
+        Ok(part)
     }
 
     /// The cache key: the mesh's hash, folded with the couplings and the method when
     /// they are not the defaults (so plain meshes keep their keys).
     pub fn key(&self) -> u64 {
         let mut h = self.mesh.hash();
-        if self.edges.is_empty() && self.method == Method::Metis {
+        if self.edges.is_empty() && self.method == Method::Metis && self.groups.is_empty() {
             return h;
         }
         let mut eat = |x: u64| {
@@ -69,7 +77,45 @@ impl Request<'_> {
             Method::Metis => u64::MAX,
             Method::Slabs { axis } => axis as u64,
         });
+        for &g in self.groups {
+            eat(g as u64);
+        }
         h
+    }
+}
+
+/// Move every group's elements to the rank that holds most of them (ties: the lowest),
+/// so that a group evaluated as one unit (an F-bar patch) is on one rank. Idempotent;
+/// the imbalance it adds is at most a group's size per cut group.
+pub fn keep_groups_whole(part: &mut [u32], groups: &[u32]) {
+    if groups.is_empty() {
+        return;
+    }
+    let mut votes: std::collections::HashMap<u32, Vec<(u32, usize)>> = Default::default();
+    for (&g, &p) in groups.iter().zip(part.iter()) {
+        if g == NO_GROUP {
+            continue;
+        }
+        let v = votes.entry(g).or_default();
+        match v.iter_mut().find(|c| c.0 == p) {
+            Some(c) => c.1 += 1,
+            None => v.push((p, 1)),
+        }
+    }
+    let winner: std::collections::HashMap<u32, u32> = votes
+        .into_iter()
+        .map(|(g, v)| {
+            let best = v
+                .iter()
+                .max_by(|a, b| a.1.cmp(&b.1).then(b.0.cmp(&a.0)))
+                .map_or(0, |c| c.0);
+            (g, best)
+        })
+        .collect();
+    for (p, g) in part.iter_mut().zip(groups) {
+        if let Some(&w) = winner.get(g) {
+            *p = w;
+        }
     }
 }
 

@@ -68,7 +68,9 @@ pub fn build(deck: &Deck, deck_dir: &Path) -> Result<Scene> {
     contributions.extend(pairs.into_iter().map(ContributionDef::Pairs));
     contributions.extend(bolts.into_iter().map(ContributionDef::Pairs));
     let (part_descriptions, warnings) = (parts.descriptions, parts.warnings);
+    let elem_patch = fbar_patches(&parts.mesh, &parts.formulation)?;
     let model = ModelDef {
+        elem_patch,
         partition: settings::partition_method(deck)?,
         contributions,
         mesh: parts.mesh,
@@ -89,6 +91,25 @@ pub fn build(deck: &Deck, deck_dir: &Path) -> Result<Scene> {
     run.parts = part_descriptions;
     run.warnings = warnings;
     Ok(Scene { model, run })
+}
+
+/// The F-bar patches of the tet4 that take F-bar ([`crate::fem::element::in_patch`]),
+/// formed on the whole mesh so that they do not depend on the rank count; empty if none.
+fn fbar_patches(
+    mesh: &crate::mesh::Mesh,
+    part_formulation: &[crate::fem::element::Formulation],
+) -> Result<Vec<u32>> {
+    let member: Vec<bool> = (0..mesh.n_elems())
+        .map(|e| {
+            let form = part_formulation[mesh.elem_part[e] as usize];
+            crate::fem::element::in_patch(mesh.kinds[e], form)
+        })
+        .collect();
+    if !member.contains(&true) {
+        return Ok(Vec::new());
+    }
+    use crate::mesh::patches::{form, PATCH_ELEMENTS};
+    form(mesh, &member, PATCH_ELEMENTS).map_err(crate::Error::runtime)
 }
 
 /// The scene's name (it becomes file names) and every list's names, each used once.

@@ -5,7 +5,7 @@
 
 use super::check::err;
 use super::deck::*;
-use crate::fem::element::{applies, describe_for, Formulation};
+use crate::fem::element::{applies, describe_for, for_kind, Formulation};
 use crate::mesh::{ElemKind, Mesh};
 use crate::model::def::*;
 use crate::Result;
@@ -183,14 +183,21 @@ pub(super) fn fit_to_elements(
     let stored = if counts.iter().any(|c| applies(c.0, form)) {
         form
     } else {
-        Formulation::Standard
+        counts.first().map_or(form, |c| for_kind(c.0, form))
     };
-    if stored != form && p.hourglass.is_some() {
+    // Only hex8 have an hourglass spring (F-bar, hybrid, reduced).
+    let no_spring = stored != form || !counts.iter().any(|c| c.0 == ElemKind::Hex8);
+    if no_spring && p.hourglass.is_some() {
         return Err(err(
             format!("{f}.hourglass"),
             format!(
-                "part `{name}` has no element with an hourglass spring (its elements take \
-                 the standard formulation)"
+                "part `{name}` has no element with an hourglass spring (only F-bar, hybrid \
+                 and reduced hex8 have one; its elements are {})",
+                counts
+                    .iter()
+                    .map(|c| c.0.name())
+                    .collect::<Vec<_>>()
+                    .join(", ")
             ),
         ));
     }
@@ -207,31 +214,24 @@ pub(super) fn fit_to_elements(
         q.formulation = FormulationDeck::Auto;
         q.hourglass = None;
         match part_formulation_of(&q, material, f, explicit) {
-            Ok(g) if counts.iter().all(|c| applies(c.0, g)) && g != Formulation::Standard => {
-                format!("formulation = \"auto\" (here {})", describe_for(k, g))
+            Ok(g) if for_kind(k, g) != Formulation::Standard => {
+                format!(
+                    "formulation = \"auto\" (here {})",
+                    describe_for(k, for_kind(k, g))
+                )
             }
-            _ => "formulation = \"fbar\" or \"hybrid\"".into(),
+            _ if applies(k, Formulation::Hybrid { hourglass: 0.0 }) => {
+                "formulation = \"fbar\" or \"hybrid\"".into()
+            }
+            _ => "formulation = \"fbar\"".into(),
         }
     };
     for &(k, n) in &counts {
-        let g = if applies(k, stored) {
-            stored
-        } else {
-            Formulation::Standard
-        };
+        let g = for_kind(k, stored);
         let mut locks = Vec::new();
         if g == Formulation::Standard && nu > LOCKING_NU {
             locks.push(format!("nu = {nu} > {LOCKING_NU}"));
-            let instead = if applies(k, Formulation::FBAR) {
-                format!("use {}", what_auto(k))
-            } else {
-                format!(
-                    "{} has no other formulation: mesh the part with hex8 or tet10 \
-                     (Gmsh `SetOrder 2`, or element = \"tet10\" on a generated mesh) \
-                     and use formulation = \"auto\" (hybrid)",
-                    k.name()
-                )
-            };
+            let instead = format!("use {}", what_auto(k));
             warnings.push(format!(
                 "part `{name}` ({f}): {n} {k} with the {g} formulation lock at nu = {nu} > \
                  {LOCKING_NU} (volumetric locking: forces and stiffness come out too high, \

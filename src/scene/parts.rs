@@ -752,9 +752,9 @@ mod tests {
         .unwrap()
     }
 
-    /// A mixed hex8/tet4 part: `auto` gives its hex8 auto's choice and its tet4 the
-    /// standard element, says so, and warns on the tet4 alone; a formulation named in the
-    /// deck that does not apply to its tet4 is an error naming the share of them.
+    /// A mixed hex8/tet4 part: `auto` gives its hex8 auto's choice (hybrid) and its tet4
+    /// the hybrid F-bar patch, and says so; `standard` warns on both; a formulation named
+    /// in the deck that does not apply to its tet4 is an error naming the share of them.
     #[test]
     fn a_mixed_part_says_what_each_element_type_gets() {
         let rubber = MaterialDef::NeoHookean {
@@ -768,18 +768,22 @@ mod tests {
         assert!(fit.formulation.is_hybrid());
         assert_eq!(
             fit.description,
-            "b: 8 hex8 hybrid, 48 tet4 standard (locks: nu = 0.4995 > 0.45)"
+            "b: 8 hex8 hybrid, 48 tet4 hybrid F-bar patch (8 tets share one volume ratio and a pressure unknown)"
         );
-        assert_eq!(fit.warnings.len(), 1, "{:?}", fit.warnings);
-        assert!(fit.warnings[0].starts_with("part `b` (parts[0]): 48 tet4 with the standard"));
-        let p = part("fbar");
+        assert!(fit.warnings.is_empty(), "{:?}", fit.warnings);
+        let p = part("standard");
+        let form = part_formulation_of(&p, &rubber, "parts[0]", false).unwrap();
+        let fit = fit_to_elements(&p, "parts[0]", form, &m, &rubber, false).unwrap();
+        assert_eq!(fit.warnings.len(), 2, "{:?}", fit.warnings);
+        assert!(fit.warnings[1].starts_with("part `b` (parts[0]): 48 tet4 with the standard"));
+        let p = part("reduced");
         let form = part_formulation_of(&p, &rubber, "parts[0]", false).unwrap();
         let e = fit_to_elements(&p, "parts[0]", form, &m, &rubber, false)
             .err()
             .unwrap()
             .to_string();
         assert!(
-            e.contains("parts[0].formulation: \"fbar\" does not apply to tet4 elements (part `b`: 48 of its 56 elements are tet4)"),
+            e.contains("parts[0].formulation: \"reduced\" does not apply to tet4 elements (part `b`: 48 of its 56 elements are tet4)"),
             "{e}"
         );
     }
