@@ -70,6 +70,51 @@ fn contact_patch_pressure_passes_exactly_with_mortar_weights() {
     assert!(spread > 0.05, "node-to-face pressures within {spread} of p");
 }
 
+/// Issue 35: the same patch test with the lower block in tet10 (tri6 reference faces,
+/// 3 × 3 × 2 cells cut into tets) under the upper hex8 block's 4 × 4 tracked quads:
+/// mortar weights with the reference side's quadratic shape functions give every
+/// tracked node the pressure p to 1e-8 (measured ~1e-12), nothing penetrates, and the
+/// interface carries p A. Tracking the tet10 block's faces instead is refused naming
+/// the part (its corners have no positive dual weight).
+#[test]
+fn contact_patch_passes_on_tri6_reference_faces() {
+    let lower = "cells = [3, 3, 2] }";
+    let deck = edit(
+        &pressed("mortar"),
+        lower,
+        "cells = [3, 3, 2], element = \"tet10\" }",
+    );
+    let out = run_deck("pairs-patch-tet10", &deck);
+    let gap = field(&out, "contact_gap");
+    let p = field(&out, "contact_pressure");
+    let tracked: Vec<f64> = p
+        .iter()
+        .zip(&gap)
+        .filter(|(_, g)| !g.is_nan())
+        .map(|(p, _)| *p)
+        .collect();
+    assert_eq!(tracked.len(), 25);
+    let worst = tracked.iter().fold(0.0f64, |m, p| m.max((p - 1.0).abs()));
+    eprintln!("tet10 reference, hex8 tracked: pressures within {worst:.2e} of p");
+    assert!(worst < 1e-8, "{tracked:?}");
+    assert!((column(&out, "interface.fz").last().unwrap() - 100.0).abs() < 1e-8);
+    assert!(column(&out, "max_penetration").iter().all(|&g| g < 1e-9));
+
+    let swapped = edit(
+        &deck,
+        "tracked = \"upper_bottom\"\nreference = \"lower_top\"",
+        "tracked = \"lower_top\"\nreference = \"upper_bottom\"",
+    );
+    let e = try_run_deck("pairs-patch-tet10-tracked", &swapped)
+        .err()
+        .expect("a tracked tri6 surface must be refused")
+        .to_string();
+    assert!(
+        e.contains("pairs[0].tracked: `lower_top` lies on tet10 elements (part `lower`)"),
+        "{e}"
+    );
+}
+
 /// Sheared by a mean 0.2 p (the top moved along x), below μ p = 0.5 p everywhere
 /// (measured at most 0.30 p at a node): every pair sticks at every step and nothing
 /// slips (max_slip at round-off).

@@ -183,7 +183,8 @@ fn traction_on_tri6_faces_passes_the_patch_test() {
 /// flat frictionless rigid wall by δ takes the uniform compression at every node
 /// (zero penetration makes the top a prescribed plane, whatever the nodal weights:
 /// corners a twelfth of a face, midside nodes a quarter), and the wall's force is
-/// E ε A. Small-sliding pairs on tri6 faces are refused naming the part.
+/// E ε A. A small-sliding pair tracking tri6 faces is refused naming the part (tri6
+/// reference faces pass the pair patch test: `tests/pairs.rs`).
 #[test]
 fn wall_on_tri6_faces_passes_the_contact_patch_test() {
     let msh = tet10_msh([1.0; 3], [2, 2, 2], 0.15, 0.0);
@@ -220,8 +221,8 @@ fn wall_on_tri6_faces_passes_the_contact_patch_test() {
         .expect("must be refused")
         .to_string();
     assert!(
-        e.contains("pairs[0].reference: `end` lies on tet10 elements (part `block`)")
-            && e.contains("contact on tri6 faces is not supported yet"),
+        e.contains("pairs[0].tracked: `side` lies on tet10 elements (part `block`)")
+            && e.contains("make the tet10 part's surface the `reference`"),
         "{e}"
     );
 }

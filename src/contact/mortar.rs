@@ -202,8 +202,8 @@ pub fn overlap_integrals(
     if dot(ps.n, pm.n) >= 0.0 {
         return Ok(Vec::new());
     }
-    let s2: Vec<[f64; 2]> = xs.iter().map(|&p| ps.to2(p)).collect();
-    let mut m2: Vec<[f64; 2]> = xm.iter().map(|&p| ps.to2(p)).collect();
+    let s2: Vec<[f64; 2]> = corners(xs).iter().map(|&p| ps.to2(p)).collect();
+    let mut m2: Vec<[f64; 2]> = corners(xm).iter().map(|&p| ps.to2(p)).collect();
     if area2(&m2) < 0.0 {
         m2.reverse();
     }
@@ -263,6 +263,16 @@ pub fn overlap_integrals(
 
 /// The tracked face's area element relative to its plane's at η: |a1 × a2| over the
 /// Jacobian of the plane projection (1 for a flat face).
+/// A face's corners, its outline for clipping: a tri6 (a tet10's face) by its straight
+/// corner triangle, which is the face itself where it is flat.
+fn corners(x: &[[f64; 3]]) -> &[[f64; 3]] {
+    if x.len() == 6 {
+        &x[..3]
+    } else {
+        x
+    }
+}
+
 fn area_ratio(xs: &[[f64; 3]], eta: [f64; 2], p: &Plane) -> f64 {
     let (_, dn) = face_shape(xs.len(), eta);
     let mut a1 = [0.0; 3];

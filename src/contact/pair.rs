@@ -25,11 +25,15 @@ use super::vec3::{cross, dot, norm};
 
 type M3 = [[f64; 3]; 3];
 
-/// Shape functions of a reference face at ξ and their derivatives (3 or 4 nodes, in
+/// Shape functions of a reference face at ξ and their derivatives (3, 4 or 6 nodes, in
 /// [`crate::mesh::ElemKind::faces`] order: quad4 counter-clockwise from (−1, −1); tri3
-/// with N = (1 − ξ − η, ξ, η)).
+/// with N = (1 − ξ − η, ξ, η); tri6, a tet10's face, its corners then midside nodes).
 pub fn face_shape(n_nodes: usize, xi: [f64; 2]) -> (Vec<f64>, Vec<[f64; 2]>) {
     let (s, t) = (xi[0], xi[1]);
+    if n_nodes == 6 {
+        use crate::fem::shape::{tri6_dn, tri6_n};
+        return (tri6_n(xi).to_vec(), tri6_dn(xi).to_vec());
+    }
     if n_nodes == 3 {
         (
             vec![1.0 - s - t, s, t],
@@ -55,7 +59,7 @@ pub fn face_shape(n_nodes: usize, xi: [f64; 2]) -> (Vec<f64>, Vec<[f64; 2]>) {
 
 /// Whether ξ lies on the face (within `tol` in its parameters).
 pub fn on_face(n_nodes: usize, xi: [f64; 2], tol: f64) -> bool {
-    if n_nodes == 3 {
+    if n_nodes != 4 {
         xi[0] >= -tol && xi[1] >= -tol && xi[0] + xi[1] <= 1.0 + tol
     } else {
         xi[0].abs() <= 1.0 + tol && xi[1].abs() <= 1.0 + tol
@@ -74,9 +78,19 @@ fn projector(v: [f64; 3], scale: f64) -> M3 {
     })
 }
 
+/// The tri6's second derivatives (∂ξ², ∂ξ∂η, ∂η²) per node, constant.
+const TRI6_DD: [[f64; 3]; 6] = [
+    [4.0, 4.0, 4.0],
+    [4.0, 0.0, 0.0],
+    [0.0, 0.0, 4.0],
+    [-8.0, -4.0, 0.0],
+    [0.0, 4.0, 0.0],
+    [0.0, -4.0, -8.0],
+];
+
 /// The closest point of x on a face (its nodes' positions `xa`): ξ by Newton on
 /// min |x − x(ξ)|² from the centre (Gauss–Newton with the exact second term for the
-/// bilinear quad), and the distance. Coordinates are taken relative to the face's
+/// bilinear quad and the tri6), and the distance. Coordinates are taken relative to the face's
 /// centroid, so a model far from the origin converges as one at it. None if Newton does
 /// not settle (a degenerate face).
 pub fn project_on_face(x: [f64; 3], xa: &[[f64; 3]]) -> Option<([f64; 2], f64)> {
@@ -87,7 +101,7 @@ pub fn project_on_face(x: [f64; 3], xa: &[[f64; 3]]) -> Option<([f64; 2], f64)> 
         .iter()
         .map(|p| [p[0] - c[0], p[1] - c[1], p[2] - c[2]])
         .collect();
-    let mut xi = if nf == 3 { [1.0 / 3.0; 2] } else { [0.0; 2] };
+    let mut xi = if nf != 4 { [1.0 / 3.0; 2] } else { [0.0; 2] };
     let point = |xi: [f64; 2]| -> [f64; 3] {
         let (n, _) = face_shape(nf, xi);
         std::array::from_fn(|k| (0..nf).map(|a| n[a] * xa[a][k]).sum())
@@ -105,20 +119,35 @@ pub fn project_on_face(x: [f64; 3], xa: &[[f64; 3]]) -> Option<([f64; 2], f64)> 
             }
         }
         let r = [x[0] - p[0], x[1] - p[1], x[2] - p[2]];
-        // ∂²x/∂ξ∂η of the bilinear quad (zero on a triangle).
-        let mut a12 = [0.0; 3];
+        // ∂²x/∂ξ², ∂ξ∂η, ∂η²: the bilinear quad's cross term, the tri6's constant
+        // second derivatives (zero on a tri3).
+        let mut a2nd = [[0.0; 3]; 3];
         if nf == 4 {
             let c = [1.0, -1.0, 1.0, -1.0];
             for k in 0..4 {
                 for d in 0..3 {
-                    a12[d] += 0.25 * c[k] * xa[k][d];
+                    a2nd[1][d] += 0.25 * c[k] * xa[k][d];
+                }
+            }
+        } else if nf == 6 {
+            for (k, dd) in TRI6_DD.iter().enumerate() {
+                for (row, v) in a2nd.iter_mut().zip(dd) {
+                    for d in 0..3 {
+                        row[d] += v * xa[k][d];
+                    }
                 }
             }
         }
         let g = [dot(a[0], r), dot(a[1], r)];
         let h = [
-            [dot(a[0], a[0]), dot(a[0], a[1]) - dot(a12, r)],
-            [dot(a[1], a[0]) - dot(a12, r), dot(a[1], a[1])],
+            [
+                dot(a[0], a[0]) - dot(a2nd[0], r),
+                dot(a[0], a[1]) - dot(a2nd[1], r),
+            ],
+            [
+                dot(a[1], a[0]) - dot(a2nd[1], r),
+                dot(a[1], a[1]) - dot(a2nd[2], r),
+            ],
         ];
         let det = h[0][0] * h[1][1] - h[0][1] * h[1][0];
         if det.abs() <= 1e-300 || !det.is_finite() {
@@ -671,6 +700,38 @@ mod tests {
         for t in ["Stick", "Slip", "active: false"] {
             assert!(branches.iter().any(|b| b.contains(t)), "{t}: {branches:?}");
         }
+    }
+
+    /// On a curved tri6 face (midside nodes lifted) the closest point search converges
+    /// (Newton with the tri6's second derivatives) to a point whose distance vector is
+    /// normal to the face, and the tri6 shape functions sum to one with derivatives
+    /// summing to zero.
+    #[test]
+    fn projection_on_a_curved_tri6_face() {
+        let face = [
+            [0.0, 0.0, 0.0],
+            [2.0, 0.0, 0.0],
+            [0.0, 2.0, 0.0],
+            [1.0, 0.0, 0.2],
+            [1.0, 1.0, 0.3],
+            [0.0, 1.0, 0.2],
+        ];
+        let x = [0.7, 0.6, 1.1];
+        let (xi, dist) = project_on_face(x, &face).unwrap();
+        assert!(on_face(6, xi, 0.0), "{xi:?}");
+        let (n, dn) = face_shape(6, xi);
+        assert!((n.iter().sum::<f64>() - 1.0).abs() < 1e-14);
+        assert!(dn.iter().map(|d| d[0].abs() + d[1].abs()).sum::<f64>() > 0.0);
+        assert!((0..2).all(|j| dn.iter().map(|d| d[j]).sum::<f64>().abs() < 1e-14));
+        let p: [f64; 3] = std::array::from_fn(|c| (0..6).map(|k| n[k] * face[k][c]).sum());
+        let r = [x[0] - p[0], x[1] - p[1], x[2] - p[2]];
+        for j in 0..2 {
+            let a: [f64; 3] = std::array::from_fn(|c| (0..6).map(|k| dn[k][j] * face[k][c]).sum());
+            assert!(dot(a, r).abs() < 1e-12, "tangent {j}: {}", dot(a, r));
+        }
+        assert!((norm(r) - dist).abs() < 1e-14);
+        // Not the flat corner triangle's answer: the lifted face is closer.
+        assert!(dist < 1.1 - 0.1, "{dist}");
     }
 
     /// A node's residual and its face nodes' are equal and opposite in sum (the pair

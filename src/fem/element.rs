@@ -4,7 +4,7 @@
 //! [`super::kernel`], the formulation-free measures (volume, reference check) are in
 //! [`super::measure`].
 
-use super::eas::Eas;
+use super::eas::{Eas, EasWedge};
 pub use super::error::ElementError;
 use super::hybrid::{Hybrid, HYBRID_TET10, HYBRID_WEDGE6};
 use super::kernel::{ElementData, ElementKernel, ElementOutput};
@@ -101,17 +101,20 @@ impl Formulation {
 /// Whether `form` is a formulation of `kind`: hex8 has them all; tet4 the standard
 /// one-point element, F-bar, which on a tet4 is the F-bar patch ([`super::patch`]: a
 /// tet's own J̄ would be its J), and hybrid, the F-bar patch with a pressure unknown per
-/// patch; tet10 and wedge6 standard, F-bar and hybrid (the mean-dilatation element). The deck refuses a formulation that does not apply
-/// (`scene/formulation.rs`); a new element type adds its arm here and in [`kernel`].
+/// patch; tet10 and wedge6 standard, F-bar and hybrid (the mean-dilatation element), and
+/// the wedge6 EAS (the solid-shell wedge of a sheet's triangles). The deck refuses a
+/// formulation that does not apply (`scene/formulation.rs`); a new element type adds its
+/// arm here and in [`kernel`].
 pub fn applies(kind: ElemKind, form: Formulation) -> bool {
     match kind {
         ElemKind::Hex8 => true,
         // F-bar and hybrid are the mean-dilatation element on tet10 and wedge6 ([`kernel`]),
         // the F-bar patch on tet4.
-        ElemKind::Tet4 | ElemKind::Tet10 | ElemKind::Wedge6 => matches!(
+        ElemKind::Tet4 | ElemKind::Tet10 => matches!(
             form,
             Formulation::Standard | Formulation::FBar { .. } | Formulation::Hybrid { .. }
         ),
+        ElemKind::Wedge6 => !matches!(form, Formulation::Reduced { .. }),
     }
 }
 
@@ -157,6 +160,7 @@ pub fn describe_for(kind: ElemKind, form: Formulation) -> String {
         (ElemKind::Tet10, Formulation::Hybrid { .. }) => {
             "hybrid (P2/P0: mean dilatation with its pressure an unknown)".into()
         }
+        (ElemKind::Wedge6, Formulation::Eas) => "EAS (solid-shell wedge, 12 modes)".into(),
         (ElemKind::Wedge6, Formulation::FBar { .. }) => {
             "mean dilatation (pressure condensed)".into()
         }
@@ -195,6 +199,7 @@ pub fn kernel(kind: ElemKind, form: Formulation) -> Box<dyn ElementKernel> {
         // The wedge6 as the tet10 (P1 × P1 prism, 3 × 2 points).
         (ElemKind::Wedge6, Formulation::FBar { .. }) => Box::new(MeanDilatation { tab: &WEDGE6 }),
         (ElemKind::Wedge6, Formulation::Hybrid { .. }) => Box::new(HYBRID_WEDGE6),
+        (ElemKind::Wedge6, Formulation::Eas) => Box::new(EasWedge),
         (ElemKind::Wedge6, _) => Box::new(Standard { tab: &WEDGE6 }),
     }
 }
@@ -250,7 +255,8 @@ mod tests {
                 }
                 assert_eq!(
                     applies(k, f),
-                    !matches!(f, Formulation::Reduced { .. } | Formulation::Eas)
+                    !matches!(f, Formulation::Reduced { .. })
+                        && (k == ElemKind::Wedge6 || f != Formulation::Eas)
                 );
             }
             assert!(!f.describe().contains("hex8"), "{}", f.describe());

@@ -556,20 +556,25 @@ pub fn read_msh(text: &str, part: u32) -> Result<Mesh, String> {
     Ok(mesh)
 }
 
-/// Read an ASCII Gmsh MSH 4.1 surface mesh of quad4 elements (a sheet's middle or outer
-/// surface) with its physical surfaces, curves and points, for [`super::sheet`].
+/// Read an ASCII Gmsh MSH 4.1 surface mesh of quad4 and tri3 elements (a sheet's middle
+/// or outer surface) with its physical surfaces, curves and points, for
+/// [`super::sheet`].
 pub fn read_surface(text: &str) -> Result<Surface, String> {
     let mut raw = parse(text)?;
     if let Some(v) = raw.elems.iter().find(|e| e.dim == 3) {
         return Err(format!(
-            "line {}: element {} is a volume element; a sheet is read from a surface mesh of quad4 elements (read volume meshes with kind = \"gmsh\")",
+            "line {}: element {} is a volume element; a sheet is read from a surface mesh of quad4 and tri3 elements (read volume meshes with kind = \"gmsh\")",
             v.line, v.tag
         ));
     }
-    if let Some(t) = raw.elems.iter().find(|e| e.dim == 2 && e.nn != 4) {
+    if let Some(t) = raw
+        .elems
+        .iter()
+        .find(|e| e.dim == 2 && e.nn != 4 && e.nn != 3)
+    {
         return Err(format!(
-            "line {}: element {} is a triangle; a sheet is extruded from quad4 elements only (Mesh.RecombineAll = 1)",
-            t.line, t.tag
+            "line {}: element {} is a surface element of {} nodes; a sheet is extruded from quad4 and tri3 elements (Mesh.ElementOrder = 1)",
+            t.line, t.tag, t.nn
         ));
     }
     let mut s = Surface {
@@ -583,7 +588,7 @@ pub fn read_surface(text: &str) -> Result<Surface, String> {
                 for name in raw.groups(re) {
                     s.quad_groups.entry(name).or_default().push(s.quads.len());
                 }
-                s.quads.push([nodes[0], nodes[1], nodes[2], nodes[3]]);
+                s.quads.push(nodes.to_vec());
                 s.quad_lines.push((re.line, re.tag));
             }
             1 => {
@@ -602,7 +607,7 @@ pub fn read_surface(text: &str) -> Result<Surface, String> {
         }
     }
     if s.quads.is_empty() {
-        return Err("mesh file has no quad4 surface elements to extrude".to_string());
+        return Err("mesh file has no quad4 or tri3 surface elements to extrude".to_string());
     }
     Ok(s)
 }
@@ -794,14 +799,26 @@ $EndElements
         assert!(e.contains("read by kind = \"sheet\""), "{e}");
         let e = read_surface(HEXES).unwrap_err();
         assert!(e.contains("element 4 is a volume element"), "{e}");
-        let e = read_surface(
+        // Triangles are facets of a sheet too (they become wedges); tri6 is refused.
+        let tris = read_surface(
             &quads
                 .replace("2 1 3 2", "2 1 2 2")
                 .replace("2 10 19 22 13", "2 10 19 22")
                 .replace("3 13 22 25 16", "3 13 22 25"),
         )
+        .unwrap();
+        assert_eq!(tris.quads, vec![vec![0, 3, 4], vec![1, 4, 5]]);
+        let e = read_surface(
+            &quads
+                .replace("2 1 3 2", "2 1 9 2")
+                .replace("2 10 19 22 13", "2 10 19 22 13 16 25")
+                .replace("3 13 22 25 16", "3 13 22 25 16 10 19"),
+        )
         .unwrap_err();
-        assert!(e.contains("element 2 is a triangle"), "{e}");
+        assert!(
+            e.contains("element 2 is a surface element of 6 nodes"),
+            "{e}"
+        );
     }
 
     #[test]

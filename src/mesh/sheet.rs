@@ -1,8 +1,10 @@
-//! Sheets: a quad4 surface mesh extruded by a thickness into hex8 layers (paper §3.4:
-//! thin walls meshed by their surface, one or two solid elements through the thickness).
+//! Sheets: a surface mesh of quads and triangles extruded by a thickness into layers of
+//! hex8 and wedge6 elements (paper §3.4: thin walls meshed by their surface, one or two
+//! solid elements through the thickness; issue 35: the triangles Gmsh leaves in a
+//! recombined mesh become solid-shell wedges).
 //!
-//! The quads are first oriented alike across shared edges (Gmsh gives each surface
-//! entity its own orientation), starting from each connected piece's first quad in the
+//! The facets are first oriented alike across shared edges (Gmsh gives each surface
+//! entity its own orientation), starting from each connected piece's first facet in the
 //! file. Each node then moves along its mitred normal: the unit sum of its quads'
 //! normals, scaled by 1 / min(n · n_q) so every face keeps the full thickness at a fold
 //! (a hat section's 90° bends), as an offset curve does.
@@ -12,14 +14,16 @@ use std::collections::{BTreeMap, HashMap};
 use super::{ElemKind, FaceRef, Mesh};
 use nalgebra::Vector3;
 
-/// A surface mesh as read (from Gmsh): quads and the physical groups on them.
+/// A surface mesh as read (from Gmsh): facets (quad4 or tri3, corners counter-clockwise
+/// about their normal) and the physical groups on them.
 #[derive(Debug, Clone, Default)]
 pub struct Surface {
     pub coords: Vec<[f64; 3]>,
-    pub quads: Vec<[usize; 4]>,
-    /// For messages: the file line and element tag of each quad.
+    /// Quads (4 corners) and triangles (3).
+    pub quads: Vec<Vec<usize>>,
+    /// For messages: the file line and element tag of each facet.
     pub quad_lines: Vec<(usize, u64)>,
-    /// Physical surfaces: quad indices.
+    /// Physical surfaces: facet indices.
     pub quad_groups: BTreeMap<String, Vec<usize>>,
     /// Physical curves: line2 elements (node pairs).
     pub edge_groups: BTreeMap<String, Vec<[usize; 2]>>,
@@ -60,21 +64,22 @@ fn unit(a: Vector3<f64>) -> Option<Vector3<f64>> {
 /// Orient every quad like its neighbours across shared edges (breadth first from each
 /// connected piece's first quad). Errors on an edge shared by more than two quads and on
 /// a surface that cannot be oriented (a Möbius strip).
-fn orient(s: &Surface) -> Result<Vec<[usize; 4]>, String> {
+fn orient(s: &Surface) -> Result<Vec<Vec<usize>>, String> {
     let name = |q: usize| {
         let (line, tag) = s.quad_lines.get(q).copied().unwrap_or((0, q as u64));
         format!("element {tag} (line {line})")
     };
     let mut edges: HashMap<(usize, usize), Vec<usize>> = HashMap::new();
     for (q, quad) in s.quads.iter().enumerate() {
-        for i in 0..4 {
-            let (a, b) = (quad[i], quad[(i + 1) % 4]);
+        let n = quad.len();
+        for i in 0..n {
+            let (a, b) = (quad[i], quad[(i + 1) % n]);
             edges.entry((a.min(b), a.max(b))).or_default().push(q);
         }
     }
     if let Some((&(a, b), qs)) = edges.iter().filter(|(_, q)| q.len() > 2).min() {
         return Err(format!(
-            "the edge between nodes at {:?} and {:?} is shared by {} quads ({}, ...); a sheet is a surface where at most two quads meet at an edge",
+            "the edge between nodes at {:?} and {:?} is shared by {} facets ({}, ...); a sheet is a surface where at most two facets meet at an edge",
             s.coords[a],
             s.coords[b],
             qs.len(),
@@ -91,17 +96,19 @@ fn orient(s: &Surface) -> Result<Vec<[usize; 4]>, String> {
         done[seed] = true;
         queue.push_back(seed);
         while let Some(q) = queue.pop_front() {
-            for i in 0..4 {
-                let (a, b) = (out[q][i], out[q][(i + 1) % 4]);
+            let n = out[q].len();
+            for i in 0..n {
+                let (a, b) = (out[q][i], out[q][(i + 1) % n]);
                 for &r in &edges[&(a.min(b), a.max(b))] {
                     if r == q {
                         continue;
                     }
                     // Alike orientation runs a shared edge the other way round.
-                    let same_way = (0..4).any(|j| out[r][j] == a && out[r][(j + 1) % 4] == b);
+                    let m = out[r].len();
+                    let same_way = (0..m).any(|j| out[r][j] == a && out[r][(j + 1) % m] == b);
                     if !done[r] {
                         if same_way {
-                            out[r] = [out[r][0], out[r][3], out[r][2], out[r][1]];
+                            out[r][1..].reverse();
                         }
                         done[r] = true;
                         queue.push_back(r);
@@ -119,7 +126,8 @@ fn orient(s: &Surface) -> Result<Vec<[usize; 4]>, String> {
     Ok(out)
 }
 
-/// Extrude the surface into `layers` hex8 elements through the thickness, part `part`.
+/// Extrude the surface into `layers` elements through the thickness, part `part`: a
+/// hex8 per quad and layer, a wedge6 per triangle and layer.
 ///
 /// Groups: `top` and `bottom` (the outer faces on the normal's side and the other);
 /// per physical surface S, element and node group S and face groups `S.top`,
@@ -138,7 +146,10 @@ pub fn extrude(s: &Surface, spec: &SheetSpec, part: u32) -> Result<Mesh, String>
             }
         }
     }
-    let quads: Vec<[usize; 4]> = orient(s)?.iter().map(|q| q.map(|n| map[n])).collect();
+    let quads: Vec<Vec<usize>> = orient(s)?
+        .iter()
+        .map(|q| q.iter().map(|&n| map[n]).collect())
+        .collect();
     let dir = thickness_directions(s, &coords, &quads)?;
     let mut mesh = stack_layers(s, spec, &coords, &dir, &quads, part)?;
     let l = spec.layers;
@@ -160,7 +171,7 @@ fn layer_node(np: usize, k: usize, n: usize) -> usize {
     k * np + n
 }
 
-/// The hex of quad q, layer k.
+/// The element of facet q, layer k.
 fn layer_elem(l: usize, q: usize, k: usize) -> usize {
     q * l + k
 }
@@ -170,17 +181,18 @@ fn layer_elem(l: usize, q: usize, k: usize) -> usize {
 fn thickness_directions(
     s: &Surface,
     coords: &[[f64; 3]],
-    quads: &[[usize; 4]],
+    quads: &[Vec<usize>],
 ) -> Result<Vec<[f64; 3]>, String> {
     let np = coords.len();
     // Corner normals, summed per node weighted by the corner's angle.
     let mut sum = vec![[0.0; 3]; np];
     let mut corner_normals: Vec<Vec<Vector3<f64>>> = vec![Vec::new(); np];
     for (q, quad) in quads.iter().enumerate() {
-        for i in 0..4 {
+        let m = quad.len();
+        for i in 0..m {
             let n = quad[i];
-            let a = Vector3::from(coords[quad[(i + 1) % 4]]) - Vector3::from(coords[n]);
-            let b = Vector3::from(coords[quad[(i + 3) % 4]]) - Vector3::from(coords[n]);
+            let a = Vector3::from(coords[quad[(i + 1) % m]]) - Vector3::from(coords[n]);
+            let b = Vector3::from(coords[quad[(i + m - 1) % m]]) - Vector3::from(coords[n]);
             let Some(nrm) = unit(a.cross(&b)) else {
                 let (line, tag) = s.quad_lines.get(q).copied().unwrap_or((0, q as u64));
                 return Err(format!(
@@ -201,7 +213,7 @@ fn thickness_directions(
     for n in 0..np {
         let Some(u) = unit(Vector3::from(sum[n])) else {
             return Err(format!(
-                "the quads at the node at {:?} fold back onto each other; no thickness direction",
+                "the facets at the node at {:?} fold back onto each other; no thickness direction",
                 coords[n]
             ));
         };
@@ -221,13 +233,14 @@ fn thickness_directions(
     Ok(dir)
 }
 
-/// The layers of hex8 nodes and elements, each element checked for inversion.
+/// The layers of nodes and elements (hex8 from quads, wedge6 from triangles), each
+/// element checked for inversion.
 fn stack_layers(
     s: &Surface,
     spec: &SheetSpec,
     coords: &[[f64; 3]],
     dir: &[[f64; 3]],
-    quads: &[[usize; 4]],
+    quads: &[Vec<usize>],
     part: u32,
 ) -> Result<Mesh, String> {
     let np = coords.len();
@@ -249,16 +262,23 @@ fn stack_layers(
                 .push([0, 1, 2].map(|i| coords[n][i] + h * dir[n][i]));
         }
     }
-    // Element of quad q, layer k: q * l + k; bottom face 0-1-2-3, normal along -n.
+    // Element of facet q, layer k: q * l + k; the bottom face (face 0 of a hex8 and of
+    // a wedge6) is the facet's, its normal along -n.
     let node = |k: usize, n: usize| layer_node(np, k, n);
     for quad in quads {
+        let m = quad.len();
+        let kind = if m == 4 {
+            ElemKind::Hex8
+        } else {
+            ElemKind::Wedge6
+        };
         for k in 0..l {
             let mut nodes = [0; 8];
-            for i in 0..4 {
+            for i in 0..m {
                 nodes[i] = node(k, quad[i]);
-                nodes[i + 4] = node(k + 1, quad[i]);
+                nodes[i + m] = node(k + 1, quad[i]);
             }
-            mesh.push_elem(ElemKind::Hex8, &nodes, part);
+            mesh.push_elem(kind, &nodes[..2 * m], part);
         }
     }
     for e in 0..mesh.n_elems() {
@@ -266,7 +286,8 @@ fn stack_layers(
             let q = e / l;
             let (line, tag) = s.quad_lines.get(q).copied().unwrap_or((0, q as u64));
             return Err(format!(
-                "element {tag} (line {line}) extrudes into an inverted hex8: the thickness {t} is too large for the surface's curvature there"
+                "element {tag} (line {line}) extrudes into an inverted {}: the thickness {t} is too large for the surface's curvature there",
+                mesh.kinds[e].name()
             ));
         }
     }
@@ -275,7 +296,7 @@ fn stack_layers(
 
 /// Face groups `bottom`, `top`, and per physical surface its element, node, `.bottom`
 /// and `.top` groups.
-fn surface_groups(s: &Surface, mesh: &mut Mesh, quads: &[[usize; 4]], np: usize, l: usize) {
+fn surface_groups(s: &Surface, mesh: &mut Mesh, quads: &[Vec<usize>], np: usize, l: usize) {
     let elem = |q: usize, k: usize| layer_elem(l, q, k);
     let face = |e: usize, f: u8| FaceRef { elem: e, face: f };
     let column = |n: usize| (0..=l).map(move |k| layer_node(np, k, n));
@@ -294,7 +315,11 @@ fn surface_groups(s: &Surface, mesh: &mut Mesh, quads: &[[usize; 4]], np: usize,
             .flat_map(|&q| (0..l).map(move |k| elem(q, k)))
             .collect();
         elems.sort_unstable();
-        let mut nodes: Vec<usize> = qs.iter().flat_map(|&q| quads[q]).flat_map(column).collect();
+        let mut nodes: Vec<usize> = qs
+            .iter()
+            .flat_map(|&q| quads[q].iter().copied())
+            .flat_map(column)
+            .collect();
         nodes.sort_unstable();
         nodes.dedup();
         mesh.face_groups.insert(
@@ -314,10 +339,10 @@ fn surface_groups(s: &Surface, mesh: &mut Mesh, quads: &[[usize; 4]], np: usize,
 struct Columns<'a> {
     np: usize,
     l: usize,
-    /// Surface node → sheet node (`usize::MAX` for nodes no quad uses).
+    /// Surface node → sheet node (`usize::MAX` for nodes no facet uses).
     map: &'a [usize],
     coords: &'a [[f64; 3]],
-    quads: &'a [[usize; 4]],
+    quads: &'a [Vec<usize>],
 }
 
 /// Per physical curve its node group (whole columns) and, on the sheet's edge, its face
@@ -327,11 +352,12 @@ fn curve_and_point_groups(s: &Surface, mesh: &mut Mesh, c: &Columns) -> Result<(
     let elem = |q: usize, k: usize| layer_elem(l, q, k);
     let face = |e: usize, f: u8| FaceRef { elem: e, face: f };
     let column = |n: usize| (0..=l).map(move |k| layer_node(np, k, n));
-    // Quad edge i (nodes i, i+1) is hex face 2 + i (see ElemKind::faces).
+    // Facet edge i (nodes i, i+1) is face 2 + i of its hex8 or wedge6 (ElemKind::faces).
     let mut edge_quads: HashMap<(usize, usize), Vec<(usize, u8)>> = HashMap::new();
     for (q, quad) in quads.iter().enumerate() {
-        for i in 0..4 {
-            let (a, b) = (quad[i], quad[(i + 1) % 4]);
+        let m = quad.len();
+        for i in 0..m {
+            let (a, b) = (quad[i], quad[(i + 1) % m]);
             edge_quads
                 .entry((a.min(b), a.max(b)))
                 .or_default()
@@ -342,7 +368,7 @@ fn curve_and_point_groups(s: &Surface, mesh: &mut Mesh, c: &Columns) -> Result<(
         match map.get(n) {
             Some(&m) if m != usize::MAX => Ok(m),
             _ => Err(format!(
-                "physical group \"{what}\" has the node at {:?}, which no quad uses",
+                "physical group \"{what}\" has the node at {:?}, which no facet uses",
                 s.coords[n]
             )),
         }
@@ -358,7 +384,7 @@ fn curve_and_point_groups(s: &Surface, mesh: &mut Mesh, c: &Columns) -> Result<(
                 Some(_) => {}
                 None => {
                     return Err(format!(
-                        "physical curve \"{g}\" has an edge from {:?} to {:?} that is not an edge of any quad",
+                        "physical curve \"{g}\" has an edge from {:?} to {:?} that is not an edge of any facet",
                         coords[a], coords[b]
                     ))
                 }
@@ -402,7 +428,7 @@ mod tests {
                 [0.0, 0.0, 1.0],
                 [0.0, 1.0, 1.0],
             ],
-            quads: vec![[0, 1, 2, 3], [1, 2, 5, 4]],
+            quads: vec![vec![0, 1, 2, 3], vec![1, 2, 5, 4]],
             quad_lines: vec![(10, 1), (11, 2)],
             quad_groups: [("flange".to_string(), vec![0])].into(),
             edge_groups: [("free".to_string(), vec![[4, 5]])].into(),
@@ -464,6 +490,48 @@ mod tests {
         }
     }
 
+    /// A triangle beside the flat flange, given the other way round, becomes a column
+    /// of wedges oriented as the quads' hexes, with its top, bottom and edge faces.
+    #[test]
+    fn extrudes_triangles_into_wedges() {
+        let mut s = folded();
+        s.coords.push([-2.0, 0.5, 0.0]);
+        s.quads.push(vec![6, 3, 0]);
+        s.quad_lines.push((12, 3));
+        s.edge_groups.insert("tip edge".into(), vec![[6, 0]]);
+        let spec = SheetSpec {
+            thickness: 0.1,
+            layers: 2,
+            offset: Offset::Middle,
+        };
+        let m = extrude(&s, &spec, 0).unwrap();
+        assert_eq!(m.n_elems(), 6);
+        assert_eq!(&m.kinds[4..], &[ElemKind::Wedge6, ElemKind::Wedge6]);
+        assert!((0..6).all(|e| m.elem_volume(e) > 0.0));
+        let vol: f64 = (0..6).map(|e| m.elem_volume(e)).sum();
+        assert!((vol - 0.25).abs() < 1e-12, "{vol}");
+        // The top faces all point up (+z) on the flat part.
+        for f in &m.face_groups["top"] {
+            let ns = m.face_nodes(*f);
+            let p: Vec<Vector3<f64>> = ns.iter().map(|&n| Vector3::from(m.coords[n])).collect();
+            let n = (p[1] - p[0]).cross(&(p[2] - p[0]));
+            if f.elem != 2 && f.elem != 3 {
+                assert!(n[2] > 0.0, "{f:?}: {n}");
+            }
+        }
+        assert_eq!(m.face_groups["top"].len(), 3);
+        // The triangle's free edge: a quad face of each wedge.
+        let edge = &m.face_groups["tip edge"];
+        assert_eq!(edge.len(), 2);
+        for f in edge {
+            assert_eq!(m.face_nodes(*f).len(), 4);
+            assert!(m
+                .face_nodes(*f)
+                .iter()
+                .all(|n| m.node_groups["tip edge"].contains(n)));
+        }
+    }
+
     #[test]
     fn refuses_bad_surfaces() {
         let spec = SheetSpec {
@@ -475,9 +543,9 @@ mod tests {
         let mut s = folded();
         s.coords.push([1.0, 0.0, 0.0]);
         s.coords.push([1.0, 1.0, 0.0]);
-        s.quads.push([1, 6, 7, 2]);
+        s.quads.push(vec![1, 6, 7, 2]);
         let e = extrude(&s, &spec, 0).unwrap_err();
-        assert!(e.contains("shared by 3 quads"), "{e}");
+        assert!(e.contains("shared by 3 facets"), "{e}");
         // A fold back onto itself (180°).
         let mut s = folded();
         s.coords[4] = [-1.0, 0.0, 0.0];

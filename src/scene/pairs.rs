@@ -94,20 +94,25 @@ pub(super) fn build_pairs(decks: &[PairsDeck], ctx: &Context) -> Result<Vec<Pair
         .collect()
 }
 
-/// Issue 35: node-to-surface contact on tri6 faces sees zero corner weights; refused,
-/// never guessed, until tri6 faces have a contact discretization.
+/// Issue 35: tri6 faces (tet10) may be the reference side, whose quadratic shape
+/// functions the pair weights and mortar integrals use as they are (a uniform pressure
+/// gives the reference nodes their consistent loads, ∫ N_a, and the patch test passes).
+/// A tracked tri6 surface is refused, never guessed: its dual functions would need the
+/// modified quadratic basis of Popp, Wohlmuth, Gee & Wall (SISC 2012), since
+/// D_t = ∫ N_t is zero at a tri6's corners, and that is not built.
 fn refuse_quadratic(
     f: &str,
-    field: &str,
     name: &str,
     mut elems: impl Iterator<Item = usize>,
     ctx: &Context,
 ) -> Result<()> {
     match elems.find(|&e| ctx.mesh.kinds[e] == ElemKind::Tet10) {
         Some(e) => Err(err(
-            format!("{f}.{field}"),
+            format!("{f}.tracked"),
             format!(
-                "`{name}` lies on tet10 elements (part `{}`): contact on tri6 faces is not supported yet",
+                "`{name}` lies on tet10 elements (part `{}`): a tracked surface must have \
+                 linear faces (tri6 faces have no positive dual weights at their corners); \
+                 make the tet10 part's surface the `reference` and the other the `tracked`",
                 ctx.part_names[ctx.mesh.elem_part[e] as usize]
             ),
         )),
@@ -128,13 +133,6 @@ fn build_one(d: &PairsDeck, f: &str, ctx: &Context) -> Result<PairsDef> {
         )
     })?;
     let nodes = ctx.set_nodes(format!("{f}.tracked"), &d.tracked)?;
-    refuse_quadratic(
-        f,
-        "reference",
-        &d.reference,
-        faces.iter().map(|fr| fr.elem),
-        ctx,
-    )?;
     let mut sorted = nodes.clone();
     sorted.sort_unstable();
     let tracked_elems = (0..mesh.n_elems()).filter(|e| {
@@ -142,7 +140,7 @@ fn build_one(d: &PairsDeck, f: &str, ctx: &Context) -> Result<PairsDef> {
             .iter()
             .any(|n| sorted.binary_search(n).is_ok())
     });
-    refuse_quadratic(f, "tracked", &d.tracked, tracked_elems, ctx)?;
+    refuse_quadratic(f, &d.tracked, tracked_elems, ctx)?;
     let areas = ctx
         .surfaces
         .get(&d.tracked)

@@ -352,12 +352,13 @@ pub enum MeshDeck {
         #[serde(default)]
         refine: Vec<SlabDeck>,
     },
-    /// A Gmsh MSH 4.1 ASCII file (hex8, tet4; physical groups become groups). A
-    /// relative path is taken from the deck's directory.
+    /// A Gmsh MSH 4.1 ASCII file (hex8, tet4, tet10, wedge6; physical groups become
+    /// groups). A relative path is taken from the deck's directory.
     Gmsh { file: String },
-    /// A thin wall: a Gmsh MSH 4.1 ASCII surface mesh of quad4 elements extruded by
-    /// `thickness` into `layers` hex8 through it, along the surface's normal (the right-
-    /// hand normal of the first quad in the file; quads are oriented alike). Groups:
+    /// A thin wall: a Gmsh MSH 4.1 ASCII surface mesh of quad4 and tri3 elements
+    /// extruded by `thickness` into `layers` elements through it (hex8 from quads,
+    /// wedge6 from triangles), along the surface's normal (the right-hand normal of the
+    /// first facet in the file; facets are oriented alike). Groups:
     /// `top`, `bottom` (faces on the normal's side and the other); per physical surface
     /// S element and node group S and faces `S.top`, `S.bottom`; per physical curve the
     /// nodes through the thickness and, along the sheet's edge, its edge faces; per
