@@ -42,6 +42,16 @@ enum Command {
         #[command(flatten)]
         study: StudyArgs,
     },
+    /// Translate an Abaqus/CalculiX input file (.inp) into an alfe deck: the mesh stays
+    /// in the file; every keyword not translated is listed with its line, in the deck
+    /// and on stderr.
+    Import {
+        /// The input file.
+        file: PathBuf,
+        /// The deck to write (default: the input's name with .toml, here).
+        #[arg(short, long, value_name = "DECK")]
+        out: Option<PathBuf>,
+    },
     /// Write the METIS partition for a rank count to the partition cache.
     Partition {
         /// Built-in scene name or deck path.
@@ -190,7 +200,15 @@ impl ContactArg {
 
 /// The subcommand names (an argument that is none of them, nor an option, is a target
 /// to run: `alfe my.toml`).
-const COMMANDS: [&str; 6] = ["run", "scenes", "scene", "check", "partition", "help"];
+const COMMANDS: [&str; 7] = [
+    "run",
+    "scenes",
+    "scene",
+    "check",
+    "import",
+    "partition",
+    "help",
+];
 
 /// `alfe`, `alfe DECK` and `alfe --out DIR` mean `alfe run ...`.
 fn with_default_command(raw: Vec<String>) -> Vec<String> {
@@ -314,6 +332,23 @@ fn main_inner(comm: &dyn Comm, raw: Vec<String>) -> Result<()> {
             let r = alfe::parallel::on_rank0(comm, || app::check(&t, ranks as usize, &o))?;
             if let Some(s) = r {
                 print!("{s}");
+            }
+            Ok(())
+        }
+        Command::Import { file, out } => {
+            let out = out.unwrap_or_else(|| {
+                PathBuf::from(file.file_stem().unwrap_or(file.as_os_str())).with_extension("toml")
+            });
+            let r = alfe::parallel::on_rank0(comm, || app::import::import(&file, &out))?;
+            if let Some(r) = r {
+                for u in &r.untranslated {
+                    eprintln!("alfe: not translated: {u}");
+                }
+                say(&format!(
+                    "alfe: wrote {} ({} keywords or lines not translated, listed in the deck)",
+                    r.written.join(", "),
+                    r.untranslated.len()
+                ));
             }
             Ok(())
         }

@@ -1,4 +1,4 @@
-//! Reader for ASCII Gmsh MSH 4.1 files.
+//! Reader for ASCII Gmsh MSH 4.1 and 2.2 files.
 //!
 //! Volume elements (hex8, tet4) become the mesh; lower-dimensional elements only define
 //! groups: every physical group gives a node group, physical surfaces also give face
@@ -190,7 +190,7 @@ impl Raw {
     }
 }
 
-/// Parse an ASCII Gmsh MSH 4.1 file; nodes are renumbered 0..n in order of appearance.
+/// Parse an ASCII Gmsh MSH 4.1 or 2.2 file; nodes are renumbered 0..n in order of appearance.
 fn parse(text: &str) -> Result<Raw, String> {
     let mut lx = Lexer {
         s: text,
@@ -198,7 +198,7 @@ fn parse(text: &str) -> Result<Raw, String> {
         line: 1,
         section: "MeshFormat",
     };
-    header(&mut lx)?;
+    let v2 = header(&mut lx)?;
     let mut raw = Raw {
         coords: Vec::new(),
         phys_names: HashMap::new(),
@@ -221,11 +221,19 @@ fn parse(text: &str) -> Result<Raw, String> {
             "Entities" => entities(&mut lx, &mut raw)?,
             "Nodes" => {
                 seen_nodes = true;
-                nodes(&mut lx, &mut raw, &mut node_index)?;
+                if v2 {
+                    nodes_v2(&mut lx, &mut raw, &mut node_index)?;
+                } else {
+                    nodes(&mut lx, &mut raw, &mut node_index)?;
+                }
             }
             "Elements" => {
                 seen_elems = true;
-                elements(&mut lx, &mut raw, &node_index, seen_nodes)?;
+                if v2 {
+                    elements_v2(&mut lx, &mut raw, &node_index)?;
+                } else {
+                    elements(&mut lx, &mut raw, &node_index, seen_nodes)?;
+                }
             }
             _ => {
                 // $Periodic, $NodeData, ...: not needed.
@@ -244,8 +252,8 @@ fn parse(text: &str) -> Result<Raw, String> {
     Ok(raw)
 }
 
-/// `$MeshFormat`: version 4.1, ASCII.
-fn header(lx: &mut Lexer) -> Result<(), String> {
+/// `$MeshFormat`: version 4.1 or 2.2, ASCII; whether it is 2.2.
+fn header(lx: &mut Lexer) -> Result<bool, String> {
     match lx.next() {
         Some(("$MeshFormat", _)) => {}
         Some((t, line)) => {
@@ -256,9 +264,10 @@ fn header(lx: &mut Lexer) -> Result<(), String> {
         None => return Err("empty mesh file: expected $MeshFormat".to_string()),
     }
     let (version, line) = lx.tok("the MSH version")?;
-    if version != "4.1" {
+    let v2 = matches!(version, "2.2" | "2.1" | "2");
+    if version != "4.1" && !v2 {
         return Err(format!(
-            "line {line}: MSH version {version} is not supported; alfe reads MSH 4.1 (gmsh -format msh41)"
+            "line {line}: MSH version {version} is not supported; alfe reads MSH 4.1 and 2.2 (gmsh -format msh41)"
         ));
     }
     let (file_type, line) = lx.tok("the file type (0 = ASCII)")?;
@@ -267,6 +276,95 @@ fn header(lx: &mut Lexer) -> Result<(), String> {
     }
     lx.tok("the data size")?;
     lx.end()?;
+    Ok(v2)
+}
+
+/// MSH 2.2 `$Nodes`: a count, then `tag x y z` lines.
+fn nodes_v2(
+    lx: &mut Lexer,
+    raw: &mut Raw,
+    node_index: &mut HashMap<u64, usize>,
+) -> Result<(), String> {
+    let n = lx.count("the number of nodes")?;
+    raw.coords.reserve(n);
+    for _ in 0..n {
+        let (t, line) = lx.tok("a node tag")?;
+        let tag: u64 = t.parse().map_err(|_| {
+            format!("line {line}: expected a node tag (a positive integer), found \"{t}\"")
+        })?;
+        if node_index.insert(tag, raw.coords.len()).is_some() {
+            return Err(format!(
+                "line {line}: node tag {tag} appears twice in $Nodes"
+            ));
+        }
+        raw.coords.push([
+            lx.real("a node coordinate")?,
+            lx.real("a node coordinate")?,
+            lx.real("a node coordinate")?,
+        ]);
+    }
+    Ok(())
+}
+
+/// MSH 2.2 `$Elements`: a count, then `tag type ntags tags... nodes...` lines; the first
+/// tag is the physical group, which stands in for the entity (4.1's groups are by entity).
+fn elements_v2(
+    lx: &mut Lexer,
+    raw: &mut Raw,
+    node_index: &HashMap<u64, usize>,
+) -> Result<(), String> {
+    let n = lx.count("the number of elements")?;
+    let mut seen: std::collections::HashSet<u64> = std::collections::HashSet::new();
+    for _ in 0..n {
+        let (t, line) = lx.tok("an element tag")?;
+        let etag: u64 = t.parse().map_err(|_| {
+            format!("line {line}: expected an element tag (a positive integer), found \"{t}\"")
+        })?;
+        if !seen.insert(etag) {
+            return Err(format!(
+                "line {line}: element tag {etag} appears twice in $Elements"
+            ));
+        }
+        let ty = lx.uint("an element type")?;
+        let Some((dim, nn)) = elem_type(ty) else {
+            return Err(format!(
+                "line {line}: element {etag} has {}, which alfe does not read; use hex8, tet4, tet10 (Mesh.ElementOrder = 2) or wedge6 volumes, or quad4/tri3 sheets",
+                elem_type_name(ty)
+            ));
+        };
+        let ntags = lx.count("the number of tags")?;
+        let mut physical = 0;
+        for k in 0..ntags {
+            let v = lx.int("an element tag value")?;
+            if k == 0 {
+                physical = v.abs();
+            }
+        }
+        if physical != 0 {
+            raw.entity_phys.insert((dim, physical), vec![physical]);
+        }
+        let at = raw.conn.len();
+        for _ in 0..nn {
+            let (t, l) = lx.tok("a node tag")?;
+            let ntag: u64 = t.parse().map_err(|_| {
+                format!("line {l}: element {etag}: expected a node tag (a positive integer), found \"{t}\"")
+            })?;
+            let Some(&v) = node_index.get(&ntag) else {
+                return Err(format!(
+                    "line {l}: element {etag} has node tag {ntag} that is not in $Nodes"
+                ));
+            };
+            raw.conn.push(v);
+        }
+        raw.elems.push(RawElem {
+            dim,
+            entity: physical,
+            tag: etag,
+            line,
+            nn,
+            at,
+        });
+    }
     Ok(())
 }
 
@@ -821,6 +919,49 @@ $EndElements
         );
     }
 
+    /// MSH 2.2 (Gmsh's legacy format, still what many tools write): a hex under a
+    /// physical volume, its bottom quad a physical surface, an unnamed physical curve.
+    #[test]
+    fn reads_msh_2_2() {
+        let text = "$MeshFormat
+2.2 0 8
+$EndMeshFormat
+$PhysicalNames
+2
+2 1 \"bottom face\"
+3 2 \"solid\"
+$EndPhysicalNames
+$Nodes
+8
+1 0 0 0
+2 1 0 0
+3 1 1 0
+4 0 1 0
+5 0 0 1
+6 1 0 1
+7 1 1 1
+8 0 1 1
+$EndNodes
+$Elements
+3
+1 1 2 7 3 1 2
+2 3 2 1 1 1 4 3 2
+3 5 2 2 1 1 2 3 4 5 6 7 8
+$EndElements
+";
+        let m = read_msh(text, 0).unwrap();
+        assert_eq!((m.n_nodes(), m.n_elems()), (8, 1));
+        assert_eq!(m.elem_groups["solid"], vec![0]);
+        assert_eq!(m.face_groups["bottom face"].len(), 1);
+        assert_eq!(m.node_groups["group7"], vec![0, 1]);
+        let bad = text.replace("3 5 2 2 1 1 2 3 4 5 6 7 8", "3 5 2 2 1 1 2 3 4 5 6 7 9");
+        let e = read_msh(&bad, 0).unwrap_err();
+        assert!(
+            e.contains("line 24: element 3 has node tag 9 that is not in $Nodes"),
+            "{e}"
+        );
+    }
+
     #[test]
     fn refuses_other_formats() {
         let e = err(&HEXES.replace("$Elements\n3 5 1 5", "$Elements\n3 4000000000000 1 5"));
@@ -838,9 +979,9 @@ $EndElements
             e.contains("element tag 4 appears twice in $Elements"),
             "{e}"
         );
-        let e = err(&HEXES.replace("4.1 0 8", "2.2 0 8"));
+        let e = err(&HEXES.replace("4.1 0 8", "3.0 0 8"));
         assert!(
-            e.contains("line 2: MSH version 2.2 is not supported"),
+            e.contains("line 2: MSH version 3.0 is not supported"),
             "{e}"
         );
         let e = err(&HEXES.replace("4.1 0 8", "4.1 1 8"));

@@ -3,10 +3,12 @@
 //! A [`Mesh`] is the serial, whole-model mesh that rank 0 builds or reads before it
 //! partitions; ranks receive their pieces through `partition::distribute`.
 
+pub mod abaqus;
 pub mod blocks;
 pub mod cylinder;
 pub mod generate;
 pub mod gmsh;
+pub mod lsdyna;
 pub mod patches;
 pub mod quadratic;
 pub mod select;

@@ -94,10 +94,13 @@ impl Overrides {
                         }
                     }
                     MeshDeck::Sheet { layers, .. } => up(layers),
-                    MeshDeck::Gmsh { .. } => {
+                    MeshDeck::Gmsh { .. }
+                    | MeshDeck::Abaqus { .. }
+                    | MeshDeck::LsDyna { .. }
+                    | MeshDeck::File { .. } => {
                         return Err(Error::input(format!(
-                            "--refine: parts[{i}] is a Gmsh mesh, which alfe cannot refine"
-                        )))
+                        "--refine: parts[{i}] is read from a mesh file, which alfe cannot refine"
+                    )))
                     }
                 }
             }

@@ -177,7 +177,28 @@ fn part_mesh(m: &MeshDeck, f: &str, part: u32, deck_dir: &Path) -> Result<Mesh> 
         MeshDeck::Ring { .. } => ring_part(m, f, part),
         MeshDeck::Blocks { .. } => blocks_part(m, f, part),
         MeshDeck::Sheet { .. } => sheet_part(m, f, part, deck_dir),
-        MeshDeck::Gmsh { .. } => gmsh_part(m, f, part, deck_dir),
+        MeshDeck::Gmsh { file } => gmsh_part(file, f, part, deck_dir),
+        MeshDeck::Abaqus { file } => abaqus_part(file, f, part, deck_dir),
+        MeshDeck::LsDyna { file } => lsdyna_part(file, f, part, deck_dir),
+        MeshDeck::File { file } => {
+            let ext = Path::new(file)
+                .extension()
+                .and_then(|e| e.to_str())
+                .map(str::to_ascii_lowercase);
+            match ext.as_deref() {
+                Some("msh") => gmsh_part(file, f, part, deck_dir),
+                Some("inp") => abaqus_part(file, f, part, deck_dir),
+                Some("k" | "key" | "dyn") => lsdyna_part(file, f, part, deck_dir),
+                _ => Err(err(
+                    format!("{f}.mesh.file"),
+                    format!(
+                        "`{file}`: kind = \"file\" reads .msh (Gmsh), .inp (Abaqus, CalculiX) \
+                         and .k, .key, .dyn (LS-DYNA) by their extension; name the kind \
+                         (\"gmsh\", \"abaqus\", \"lsdyna\") for another"
+                    ),
+                )),
+            }
+        }
     }
 }
 
@@ -487,14 +508,32 @@ fn sheet_part(m: &MeshDeck, f: &str, part: u32, deck_dir: &Path) -> Result<Mesh>
             format!("expected 1 to 64 elements through the thickness, got {layers}"),
         ));
     }
-    let (path, text) = read_mesh_file(file, f, deck_dir)?;
+    let is_k = Path::new(file)
+        .extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| matches!(e.to_ascii_lowercase().as_str(), "k" | "key" | "dyn"));
+    let (path, surface) = if is_k {
+        // An LS-DYNA shell mesh: its errors name the file and line themselves.
+        let path = deck_dir.join(file);
+        let s = crate::mesh::lsdyna::read_surface_k(&path, &read_text)
+            .map_err(|e| err(format!("{f}.mesh.file"), e))?;
+        (path, s)
+    } else {
+        let (path, text) = read_mesh_file(file, f, deck_dir)?;
+        let s = gmsh::read_surface(&text).map_err(|e| {
+            err(
+                format!("{f}.mesh.file"),
+                format!("`{}`: {e}", path.display()),
+            )
+        })?;
+        (path, s)
+    };
     let in_file = |e: String| {
         err(
             format!("{f}.mesh.file"),
             format!("`{}`: {e}", path.display()),
         )
     };
-    let surface = gmsh::read_surface(&text).map_err(in_file)?;
     let spec = crate::mesh::sheet::SheetSpec {
         thickness: *thickness,
         layers: *layers,
@@ -507,11 +546,31 @@ fn sheet_part(m: &MeshDeck, f: &str, part: u32, deck_dir: &Path) -> Result<Mesh>
     crate::mesh::sheet::extrude(&surface, &spec, part).map_err(in_file)
 }
 
+/// An Abaqus/CalculiX `.inp` part mesh (see [`part_mesh`]); its includes are read
+/// relative to the including file.
+fn abaqus_part(file: &str, f: &str, part: u32, deck_dir: &Path) -> Result<Mesh> {
+    let path = deck_dir.join(file);
+    let mut mesh = crate::mesh::abaqus::read_inp(&path, part, &read_text)
+        .map_err(|e| err(format!("{f}.mesh.file"), e))?;
+    compact_unused_nodes(&mut mesh);
+    Ok(mesh)
+}
+
+/// The loader of included files for the keyword readers.
+fn read_text(p: &Path) -> std::result::Result<String, String> {
+    std::fs::read_to_string(p).map_err(|e| format!("cannot read `{}`: {e}", p.display()))
+}
+
+/// An LS-DYNA `.k` part mesh (see [`part_mesh`]).
+fn lsdyna_part(file: &str, f: &str, part: u32, deck_dir: &Path) -> Result<Mesh> {
+    let mut mesh = crate::mesh::lsdyna::read_k(&deck_dir.join(file), part, &read_text)
+        .map_err(|e| err(format!("{f}.mesh.file"), e))?;
+    compact_unused_nodes(&mut mesh);
+    Ok(mesh)
+}
+
 /// A `Gmsh` part mesh (see [`part_mesh`]).
-fn gmsh_part(m: &MeshDeck, f: &str, part: u32, deck_dir: &Path) -> Result<Mesh> {
-    let MeshDeck::Gmsh { file } = m else {
-        unreachable!("called on Gmsh meshes only")
-    };
+fn gmsh_part(file: &str, f: &str, part: u32, deck_dir: &Path) -> Result<Mesh> {
     let (path, text) = read_mesh_file(file, f, deck_dir)?;
     let mut mesh = gmsh::read_msh(&text, part).map_err(|e| {
         err(
@@ -547,9 +606,9 @@ fn read_mesh_file(file: &str, f: &str, deck_dir: &Path) -> Result<(std::path::Pa
     })?;
     let text = String::from_utf8(bytes).map_err(|e| {
         let why = if e.as_bytes().starts_with(b"$MeshFormat") {
-            "is a binary .msh file; alfe reads ASCII MSH 4.1 (gmsh -format msh41 -bin 0, Mesh.Binary = 0)"
+            "is a binary .msh file; alfe reads ASCII MSH 4.1 or 2.2 (gmsh -format msh41 -bin 0, Mesh.Binary = 0)"
         } else {
-            "is not a text file (expected an ASCII Gmsh MSH 4.1 file)"
+            "is not a text file (expected an ASCII Gmsh MSH 4.1 or 2.2 file)"
         };
         err(format!("{f}.mesh.file"), format!("`{}` {why}", path.display()))
     })?;

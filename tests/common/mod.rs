@@ -32,6 +32,17 @@ pub fn try_run_deck(name: &str, text: &str) -> alfe::Result<RunOutcome> {
     let dir = temp_dir(name);
     let deck = dir.join("deck.toml");
     std::fs::write(&deck, text).unwrap();
+    try_run_deck_file(&dir, &deck)
+}
+
+/// Run a deck file where it lies (its relative mesh paths from its directory); results
+/// go to a fresh temp dir.
+pub fn run_deck_file(name: &str, deck: &std::path::Path) -> RunOutcome {
+    let dir = temp_dir(&format!("{name}-run"));
+    try_run_deck_file(&dir, deck).unwrap_or_else(|e| panic!("{name}: {e}"))
+}
+
+fn try_run_deck_file(dir: &std::path::Path, deck: &std::path::Path) -> alfe::Result<RunOutcome> {
     let opts = RunOptions {
         contact: None,
         target: deck.display().to_string(),

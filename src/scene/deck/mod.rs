@@ -352,9 +352,22 @@ pub enum MeshDeck {
         #[serde(default)]
         refine: Vec<SlabDeck>,
     },
-    /// A Gmsh MSH 4.1 ASCII file (hex8, tet4, tet10, wedge6; physical groups become
+    /// A Gmsh MSH 4.1 or 2.2 ASCII file (hex8, tet4, tet10, wedge6; physical groups become
     /// groups). A relative path is taken from the deck's directory.
     Gmsh { file: String },
+    /// An Abaqus/CalculiX input file (`.inp`): its `*NODE`, `*ELEMENT` (C3D8, C3D4,
+    /// C3D10, C3D6 and variants), `*NSET`, `*ELSET`, `*SURFACE` and `*INCLUDE`; sets and
+    /// surfaces become groups under the file's names. Its model keywords are not read
+    /// here (`alfe import` translates them).
+    Abaqus { file: String },
+    /// An LS-DYNA keyword file (`.k`): `*NODE`, `*ELEMENT_SOLID` (hex8, degenerate
+    /// tets and wedges, 10-node tets), `*PART` (groups by title), `*SET_NODE_LIST`,
+    /// `*SET_SEGMENT`, `*INCLUDE`.
+    #[serde(rename = "lsdyna")]
+    LsDyna { file: String },
+    /// A mesh file of the kind its extension says: `.msh` Gmsh, `.inp` Abaqus, `.k`
+    /// (`.key`, `.dyn`) LS-DYNA.
+    File { file: String },
     /// A thin wall: a Gmsh MSH 4.1 ASCII surface mesh of quad4 and tri3 elements
     /// extruded by `thickness` into `layers` elements through it (hex8 from quads,
     /// wedge6 from triangles), along the surface's normal (the right-hand normal of the
