@@ -52,6 +52,15 @@ enum Command {
         #[arg(short, long, value_name = "DECK")]
         out: Option<PathBuf>,
     },
+    /// Write a built-in scene or a deck as an Abaqus/CalculiX input file (.inp), for
+    /// CalculiX or an Abaqus user; what has no equivalent is listed.
+    Export {
+        /// Built-in scene name or deck path.
+        target: String,
+        /// The .inp file to write.
+        #[arg(short, long, value_name = "FILE")]
+        out: PathBuf,
+    },
     /// Write the METIS partition for a rank count to the partition cache.
     Partition {
         /// Built-in scene name or deck path.
@@ -200,12 +209,13 @@ impl ContactArg {
 
 /// The subcommand names (an argument that is none of them, nor an option, is a target
 /// to run: `alfe my.toml`).
-const COMMANDS: [&str; 7] = [
+const COMMANDS: [&str; 8] = [
     "run",
     "scenes",
     "scene",
     "check",
     "import",
+    "export",
     "partition",
     "help",
 ];
@@ -332,6 +342,20 @@ fn main_inner(comm: &dyn Comm, raw: Vec<String>) -> Result<()> {
             let r = alfe::parallel::on_rank0(comm, || app::check(&t, ranks as usize, &o))?;
             if let Some(s) = r {
                 print!("{s}");
+            }
+            Ok(())
+        }
+        Command::Export { target, out } => {
+            let r = alfe::parallel::on_rank0(comm, || app::export::export(&target, &out))?;
+            if let Some(left) = r {
+                for l in &left {
+                    eprintln!("alfe: not exported: {l}");
+                }
+                say(&format!(
+                    "alfe: wrote {} ({} things not exported, listed in its header)",
+                    out.display(),
+                    left.len()
+                ));
             }
             Ok(())
         }

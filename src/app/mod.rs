@@ -4,6 +4,7 @@
 //! `summary.rs` (`summary.json`), `check.rs`, `progress.rs` (the progress line).
 
 mod check;
+pub mod export;
 pub mod import;
 mod observe;
 mod progress;

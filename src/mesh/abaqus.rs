@@ -164,6 +164,28 @@ fn to_alfe_order(kind: ElemKind, nodes: &mut [usize]) {
     }
 }
 
+/// alfe's node order → Abaqus' (the same swap, its own inverse).
+pub fn to_abaqus_order(kind: ElemKind, nodes: &mut [usize]) {
+    to_alfe_order(kind, nodes);
+}
+
+/// The Abaqus face number (1-based, S1…) of a face of an element with alfe-ordered
+/// nodes `en`, given the face's corner nodes; `None` if they are not a face.
+pub fn abaqus_face_number(kind: ElemKind, en: &[usize], corners: &[usize]) -> Option<usize> {
+    let mut abq = en.to_vec();
+    to_abaqus_order(kind, &mut abq);
+    let mut want = corners.to_vec();
+    want.sort_unstable();
+    abaqus_faces(kind)
+        .iter()
+        .position(|f| {
+            let mut have: Vec<usize> = f.iter().map(|&k| abq[k]).collect();
+            have.sort_unstable();
+            have == want
+        })
+        .map(|i| i + 1)
+}
+
 /// Abaqus' element faces S1… by their corner nodes (0-based, Abaqus order).
 fn abaqus_faces(kind: ElemKind) -> &'static [&'static [usize]] {
     match kind {

@@ -1,0 +1,26 @@
+//! `alfe export`: a scene as another code's input deck (issue 36), so that the same model
+//! runs in CalculiX (installed here) or reaches an Abaqus user.
+
+pub mod abaqus;
+
+use crate::{Error, Result};
+use std::path::Path;
+
+/// Export the built-in scene or deck `target` to `out` (`.inp`); what was left out.
+pub fn export(target: &str, out: &Path) -> Result<Vec<String>> {
+    let ext = out
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase);
+    if ext.as_deref() != Some("inp") {
+        return Err(Error::input(format!(
+            "`{}`: alfe exports Abaqus/CalculiX input files (.inp); LS-DYNA keyword files are not written yet",
+            out.display()
+        )));
+    }
+    let scene = crate::scene::read(&crate::scene::load(target)?)?;
+    let e = abaqus::export_inp(&scene);
+    std::fs::write(out, &e.text)
+        .map_err(|err| Error::input(format!("cannot write `{}`: {err}", out.display())))?;
+    Ok(e.left_out)
+}
