@@ -430,3 +430,67 @@ fn tet10_and_wedge6_parts_get_and_print_their_formulations() {
         "{e}"
     );
 }
+
+/// Issue 36: the plate's middle surface as an Abaqus/CalculiX shell mesh (S4R, the same
+/// 24 × 8 grid, node sets `ROOT` and `TIP`) extrudes into the same sheet as the Gmsh
+/// file: clamped at the root and pulled down by 14 N spread over the tip's nodes, both
+/// give the same tip deflection to round-off.
+#[test]
+fn a_sheet_reads_an_abaqus_shell_mesh() {
+    let dir = temp_dir("plate-inp");
+    let (nx, ny) = (24, 8);
+    let id = |i: usize, j: usize| 1 + j * (nx + 1) + i;
+    let mut inp = String::from("*NODE\n");
+    for j in 0..=ny {
+        for i in 0..=nx {
+            inp += &format!(
+                "{}, {}, {}, 0\n",
+                id(i, j),
+                60.0 * i as f64 / nx as f64,
+                20.0 * j as f64 / ny as f64
+            );
+        }
+    }
+    inp += "*ELEMENT, TYPE=S4R, ELSET=PLATE\n";
+    for j in 0..ny {
+        for i in 0..nx {
+            inp += &format!(
+                "{}, {}, {}, {}, {}\n",
+                1 + j * nx + i,
+                id(i, j),
+                id(i + 1, j),
+                id(i + 1, j + 1),
+                id(i, j + 1)
+            );
+        }
+    }
+    inp += "*NSET, NSET=ROOT\n";
+    inp += &(0..=ny)
+        .map(|j| id(0, j).to_string())
+        .collect::<Vec<_>>()
+        .join(", ");
+    inp += "\n*NSET, NSET=TIP\n";
+    inp += &(0..=ny)
+        .map(|j| id(nx, j).to_string())
+        .collect::<Vec<_>>()
+        .join(", ");
+    inp += "\n*SHELL SECTION, ELSET=PLATE, MATERIAL=STEEL\n1.0\n";
+    std::fs::write(dir.join("plate.inp"), inp).unwrap();
+    std::fs::write(dir.join("plate.msh"), plate_msh(nx, ny)).unwrap();
+    let deck = |file: &str, root: &str, tip: &str| {
+        format!(
+            "[scene]\nname = \"p\"\nunits = \"mm-t-s\"\n[[materials]]\nname = \"steel\"\nmodel = \"linear-elastic\"\nE = {PLATE_E}\nnu = 0.0\n[[parts]]\nname = \"plate\"\nmaterial = \"steel\"\nmesh = {{ kind = \"sheet\", file = \"{}\", thickness = 1.0 }}\n[[node_sets]]\nname = \"root\"\ngroup = \"{root}\"\n[[node_sets]]\nname = \"tip\"\ngroup = \"{tip}\"\n[[boundary]]\ntype = \"fixed\"\nset = \"root\"\n[[loads]]\ntype = \"nodal\"\nset = \"tip\"\nforce = [0, 0, {}]\n[analysis]\ntype = \"static\"\nend_time = 1.0\nstep = 1.0\n[output]\ndisplacements = [\"tip\"]\n",
+            dir.join(file).display(),
+            -14.0 / (2.0 * (ny + 1) as f64)
+        )
+    };
+    let tip = |name: &str, d: String| *column(&run_deck(name, &d), "tip.uz").last().unwrap();
+    let from_inp = tip("plate-inp-run", deck("plate.inp", "ROOT", "TIP"));
+    let from_msh = tip("plate-msh-run", deck("plate.msh", "root", "tip"));
+    eprintln!("plate tip: .inp {from_inp}, .msh {from_msh}");
+    assert!(from_inp < -2.0, "{from_inp}");
+    assert!(
+        (from_inp - from_msh).abs() < 1e-9 * from_msh.abs(),
+        "{from_inp} vs {from_msh}"
+    );
+}

@@ -141,7 +141,7 @@ fn element_kind(ty: &str) -> Result<(ElemKind, usize), String> {
             {
                 "a spring, dashpot, mass or gap element"
             } else if t.starts_with('S') || t.starts_with("M3D") || t.starts_with("SC") {
-                "a shell or membrane (alfe meshes thin walls as sheets of solids)"
+                "a shell or membrane: read the file as a sheet (kind = \"sheet\", file, thickness)"
             } else if t.starts_with('B') || t.starts_with('T') {
                 "a beam or truss"
             } else if t.starts_with("CPS") || t.starts_with("CPE") || t.starts_with("CAX") {
@@ -551,6 +551,144 @@ fn block_of(line: &Line, kw: &str) -> R<Block> {
         }
         _ => Block::Skip,
     })
+}
+
+/// Nodes a shell or membrane element type lists, for sheets: 3 or 4.
+fn shell_nodes(ty: &str) -> Option<usize> {
+    match ty.to_ascii_uppercase().as_str() {
+        "S3" | "S3R" | "STRI3" | "M3D3" => Some(3),
+        "S4" | "S4R" | "S4R5" | "M3D4" | "M3D4R" => Some(4),
+        _ => None,
+    }
+}
+
+/// Read `path`'s shells (S3, S4, S4R, M3D3, M3D4 and variants) as a sheet's surface:
+/// facets, element sets as facet groups, node sets as point groups. Solid elements or
+/// other types are refused naming the line.
+pub fn read_surface_inp(path: &Path, load: &Loader) -> Result<super::sheet::Surface, String> {
+    let all = read_lines(path, load)?;
+    let mut s = super::sheet::Surface::default();
+    let mut ids: HashMap<i64, usize> = HashMap::new();
+    let mut elems: HashMap<i64, usize> = HashMap::new();
+    let mut sets: Vec<(String, Vec<i64>, bool, bool)> = Vec::new();
+    let mut block: Option<(String, Option<String>, usize)> = None;
+    for line in &all {
+        if let Some(kw) = keyword(&line.text) {
+            let t = &line.text;
+            block = match kw.as_str() {
+                "NODE" => Some(("NODE".into(), param(t, "NSET"), 0)),
+                "ELEMENT" => {
+                    let ty = param(t, "TYPE").unwrap_or_default();
+                    let Some(n) = shell_nodes(&ty) else {
+                        return Err(format!(
+                            "{}: element type {ty}: a sheet is read from shells S3, S4, S4R or membranes M3D3, M3D4 (solids: kind = \"abaqus\")",
+                            line.at()
+                        ));
+                    };
+                    Some(("ELEMENT".into(), param(t, "ELSET"), n))
+                }
+                "NSET" | "ELSET" => {
+                    let name = param(t, &kw).unwrap_or_default();
+                    sets.push((name, Vec::new(), kw == "NSET", flag(t, "GENERATE")));
+                    Some((kw.clone(), None, 0))
+                }
+                _ => None,
+            };
+            continue;
+        }
+        let f = fields(&line.text);
+        match &block {
+            Some((k, nset, _)) if k == "NODE" => {
+                let id = number::<i64>(f[0], line, "a node number")?;
+                let mut x = [0.0f64; 3];
+                for (c, v) in f
+                    .iter()
+                    .skip(1)
+                    .take(3)
+                    .enumerate()
+                    .filter(|(_, v)| !v.is_empty())
+                {
+                    x[c] = number(v, line, "a coordinate")?;
+                }
+                if ids.insert(id, s.coords.len()).is_some() {
+                    return Err(format!("{}: node {id} is defined twice", line.at()));
+                }
+                if let Some(n) = nset {
+                    s.point_groups
+                        .entry(n.clone())
+                        .or_default()
+                        .push(s.coords.len());
+                }
+                s.coords.push(x);
+            }
+            Some((k, elset, n)) if k == "ELEMENT" => {
+                if f.len() != n + 1 {
+                    return Err(format!(
+                        "{}: a shell of {n} nodes: `{}`",
+                        line.at(),
+                        line.text
+                    ));
+                }
+                let id = number::<i64>(f[0], line, "an element number")?;
+                let mut facet = Vec::with_capacity(*n);
+                for v in &f[1..] {
+                    let nid = number::<i64>(v, line, "a node number")?;
+                    facet.push(*ids.get(&nid).ok_or_else(|| {
+                        format!(
+                            "{}: element {id} uses node {nid}, which no *NODE defines (before it)",
+                            line.at()
+                        )
+                    })?);
+                }
+                let q = s.quads.len();
+                elems.insert(id, q);
+                if let Some(e) = elset {
+                    s.quad_groups.entry(e.clone()).or_default().push(q);
+                }
+                s.quads.push(facet);
+                s.quad_lines.push((line.number, id as u64));
+            }
+            Some((k, _, _)) if k == "NSET" || k == "ELSET" => {
+                let set = sets.last_mut().expect("opened");
+                for v in &f {
+                    set.1.push(number(
+                        v,
+                        line,
+                        "a number (set names in sets of a sheet are not read)",
+                    )?);
+                }
+            }
+            _ => {}
+        }
+    }
+    for (name, members, nodes, generate) in sets {
+        let list: Vec<i64> = if generate && members.len() >= 2 {
+            let step = members.get(2).copied().unwrap_or(1).max(1);
+            (members[0]..=members[1]).step_by(step as usize).collect()
+        } else {
+            members
+        };
+        if nodes {
+            let v = list
+                .iter()
+                .filter_map(|n| ids.get(n).copied())
+                .collect::<Vec<_>>();
+            s.point_groups.entry(name).or_default().extend(v);
+        } else {
+            let v = list
+                .iter()
+                .filter_map(|e| elems.get(e).copied())
+                .collect::<Vec<_>>();
+            s.quad_groups.entry(name).or_default().extend(v);
+        }
+    }
+    if s.quads.is_empty() {
+        return Err(format!(
+            "{}: the file has no shell elements to extrude",
+            path.display()
+        ));
+    }
+    Ok(s)
 }
 
 /// Read `path` (and what it includes, through `load`) as the mesh of deck part `part`.

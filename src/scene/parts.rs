@@ -512,7 +512,17 @@ fn sheet_part(m: &MeshDeck, f: &str, part: u32, deck_dir: &Path) -> Result<Mesh>
         .extension()
         .and_then(|e| e.to_str())
         .is_some_and(|e| matches!(e.to_ascii_lowercase().as_str(), "k" | "key" | "dyn"));
-    let (path, surface) = if is_k {
+    let is_inp = Path::new(file)
+        .extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case("inp"));
+    let (path, surface) = if is_inp {
+        // An Abaqus/CalculiX shell mesh: its errors name the file and line themselves.
+        let path = deck_dir.join(file);
+        let s = crate::mesh::abaqus::read_surface_inp(&path, &read_text)
+            .map_err(|e| err(format!("{f}.mesh.file"), e))?;
+        (path, s)
+    } else if is_k {
         // An LS-DYNA shell mesh: its errors name the file and line themselves.
         let path = deck_dir.join(file);
         let s = crate::mesh::lsdyna::read_surface_k(&path, &read_text)

@@ -12,8 +12,13 @@
 //! silently. Numbers are the file's: the deck's unit label is chosen from E's size and
 //! says so.
 
-use crate::mesh::abaqus::{fields, flag, keyword, param, read_inp, read_lines, Line, Loader};
-use crate::mesh::Mesh;
+use crate::mesh::abaqus::{
+    fields, flag, keyword, param, read_inp, read_lines, read_surface_inp, Line, Loader,
+};
+
+/// The node groups the model may name (a solid mesh's, or a sheet's facet and point
+/// groups).
+type Groups = Vec<String>;
 use std::collections::BTreeMap;
 use std::fmt::Write;
 use std::path::Path;
@@ -76,6 +81,8 @@ struct Model {
     step: Option<(f64, f64)>,
     actions: Vec<Action>,
     untranslated: Vec<String>,
+    /// The shell section's thickness: the model is a sheet.
+    shell: Option<f64>,
     /// Whether the follower-pressure note was made.
     pressure_noted: bool,
     /// Companion sets: (keyword line, data lines).
@@ -109,7 +116,7 @@ impl Model {
 
     /// The mesh group a model line's target names (a set, any case) or a companion set
     /// for a node number.
-    fn node_target(&mut self, target: &str, mesh: &Mesh, line: &Line) -> Result<String, String> {
+    fn node_target(&mut self, target: &str, mesh: &Groups, line: &Line) -> Result<String, String> {
         if let Ok(n) = target.parse::<u64>() {
             let name = format!("node-{n}");
             if !self.node_sets.contains_key(&name) {
@@ -119,11 +126,7 @@ impl Model {
             }
             return Ok(name);
         }
-        let Some(group) = mesh
-            .node_groups
-            .keys()
-            .find(|k| k.eq_ignore_ascii_case(target))
-        else {
+        let Some(group) = mesh.iter().find(|k| k.eq_ignore_ascii_case(target)) else {
             return Err(format!(
                 "{}: `{target}` is not a node set of the mesh",
                 line.at()
@@ -146,7 +149,7 @@ impl Model {
         name
     }
 
-    fn boundary(&mut self, f: &[&str], line: &Line, mesh: &Mesh) -> Result<(), String> {
+    fn boundary(&mut self, f: &[&str], line: &Line, mesh: &Groups) -> Result<(), String> {
         if f.len() < 2 {
             return Err(format!(
                 "{}: a *BOUNDARY line is `node or set, first dof[, last dof[, value]]`",
@@ -187,7 +190,7 @@ impl Model {
         Ok(())
     }
 
-    fn cload(&mut self, f: &[&str], line: &Line, mesh: &Mesh) -> Result<(), String> {
+    fn cload(&mut self, f: &[&str], line: &Line, mesh: &Groups) -> Result<(), String> {
         if f.len() < 3 {
             return Err(format!(
                 "{}: a *CLOAD line is `node or set, dof, magnitude`",
@@ -218,6 +221,10 @@ impl Model {
             ));
         }
         let ty = f[1].to_ascii_uppercase();
+        if self.shell.is_some() {
+            self.skip(line, "distributed loads on shells are not translated");
+            return Ok(());
+        }
         let Some(face) = ty.strip_prefix('P').and_then(|k| k.parse::<usize>().ok()) else {
             self.skip(
                 line,
@@ -251,6 +258,7 @@ enum Block {
         mooney: bool,
     },
     Static,
+    ShellThickness,
     Boundary,
     Cload,
     Dload,
@@ -319,6 +327,18 @@ fn open_keyword(m: &mut Model, line: &Line, kw: &str) -> Block {
                 return Block::Skip;
             }
             Block::Hyper { mooney }
+        }
+        "SHELL SECTION" => {
+            let (Some(elset), Some(mat)) = (param(t, "ELSET"), param(t, "MATERIAL")) else {
+                m.skip(line, "a shell section needs ELSET= and MATERIAL=");
+                return Block::Quiet;
+            };
+            if m.shell.is_some() {
+                m.skip(line, "a second shell section: the imported sheet has the first one's thickness and material");
+                return Block::Quiet;
+            }
+            m.section = Some((line.at(), elset, mat));
+            Block::ShellThickness
         }
         "SOLID SECTION" => {
             let (Some(elset), Some(mat)) = (param(t, "ELSET"), param(t, "MATERIAL")) else {
@@ -395,7 +415,7 @@ fn open_keyword(m: &mut Model, line: &Line, kw: &str) -> Block {
     }
 }
 
-fn data_line(m: &mut Model, block: Block, line: &Line, mesh: &Mesh) -> Result<(), String> {
+fn data_line(m: &mut Model, block: Block, line: &Line, mesh: &Groups) -> Result<(), String> {
     let f = fields(&line.text);
     let at = |k: usize| f.get(k).copied().unwrap_or("");
     let material = matches!(
@@ -479,6 +499,24 @@ fn data_line(m: &mut Model, block: Block, line: &Line, mesh: &Mesh) -> Result<()
                 );
             }
         }
+        Block::ShellThickness => {
+            let t = num(at(0), line)?;
+            if t <= 0.0 {
+                return Err(format!(
+                    "{}: a shell thickness must be positive, got {t}",
+                    line.at()
+                ));
+            }
+            if m.shell.is_none() {
+                m.shell = Some(t);
+            }
+            if f.len() > 1 {
+                m.skip(
+                    line,
+                    "integration points and other section data: alfe's sheet has one solid layer",
+                );
+            }
+        }
         Block::Boundary => m.boundary(&f, line, mesh)?,
         Block::Cload => m.cload(&f, line, mesh)?,
         Block::Dload => m.dload(&f, line)?,
@@ -490,8 +528,21 @@ fn data_line(m: &mut Model, block: Block, line: &Line, mesh: &Mesh) -> Result<()
 /// Import `path` (an `.inp`) as the deck `deck_path` will hold: the deck text, the
 /// companion file's text and what was not translated.
 pub fn import_inp(path: &Path, deck_path: &Path, load: &Loader) -> Result<Imported, String> {
-    let mesh = read_inp(path, 0, load)?;
     let lines = read_lines(path, load)?;
+    let shells = lines
+        .iter()
+        .any(|l| keyword(&l.text).as_deref() == Some("SHELL SECTION"));
+    // Validate the mesh as what the deck will read it as; the names it may refer to.
+    let mesh: Groups = if shells {
+        let s = read_surface_inp(path, load)?;
+        s.point_groups
+            .keys()
+            .chain(s.quad_groups.keys())
+            .cloned()
+            .collect()
+    } else {
+        read_inp(path, 0, load)?.node_groups.into_keys().collect()
+    };
     let mut m = Model::default();
     let mut block = Block::Skip;
     for line in &lines {
@@ -608,6 +659,10 @@ fn formulation_of(
         }
     };
     let (first_at, first) = types.first()?;
+    if types.iter().any(|(_, t)| !t.starts_with("C3D")) {
+        // Shells become a sheet, whose `auto` is the EAS element.
+        return None;
+    }
     let f = form(first);
     if let Some((at, other)) = types.iter().find(|(_, t)| form(t) != f) {
         notes.push(format!(
@@ -687,10 +742,16 @@ fn write_deck(m: &Model, path: &Path, deck_path: &Path) -> Result<Imported, Stri
     write_material(&mut out, mat, m.nlgeom, &mut untranslated)?;
     let _ = writeln!(
         out,
-        "\n[[parts]]\nname = \"model\"\nmaterial = {}{}\nmesh = {{ kind = \"abaqus\", file = {} }}",
+        "\n[[parts]]\nname = \"model\"\nmaterial = {}{}\nmesh = {}",
         toml_str(&mat.name),
         formulation.map_or(String::new(), |f| format!("\nformulation = \"{f}\"")),
-        toml_str(&mesh_file)
+        match m.shell {
+            Some(t) => format!(
+                "{{ kind = \"sheet\", file = {}, thickness = {t:e} }}",
+                toml_str(&mesh_file)
+            ),
+            None => format!("{{ kind = \"abaqus\", file = {} }}", toml_str(&mesh_file)),
+        }
     );
     for (n, g) in &m.node_sets {
         let _ = writeln!(
