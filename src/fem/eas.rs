@@ -450,9 +450,10 @@ fn assemble<const N: usize, const G: usize, const A: usize>(
     f.fill(0.0);
     let nd = 3 * N;
     let mut kuu: LocalTangent<N> = [[[[0.0; 3]; N]; 3]; N];
-    // K_uα by rows 3a + i, K_αu by columns.
-    let mut kua = vec![[0.0; A]; nd];
-    let mut kau = vec![vec![0.0; nd]; A];
+    // K_uα by rows (node, component), K_αu by columns; fixed-size, as kuu: this runs
+    // for every EAS element at every tangent.
+    let mut kua = [[[0.0; A]; 3]; N];
+    let mut kau = [[[0.0; 3]; N]; A];
     for g in 0..G {
         let sp = p.sps[g].as_ref().expect("evaluated");
         let grad: [[f64; 3]; N] = if finite {
@@ -473,8 +474,8 @@ fn assemble<const N: usize, const G: usize, const A: usize>(
                     lu[(i, c)] = grad[a][c];
                 }
                 for q in 0..A {
-                    kua[3 * a + i][q] += r.w[g] * bilinear(sp, &lu, &ls[q], finite);
-                    kau[q][3 * a + i] += r.w[g] * bilinear(sp, &ls[q], &lu, finite);
+                    kua[a][i][q] += r.w[g] * bilinear(sp, &lu, &ls[q], finite);
+                    kau[q][a][i] += r.w[g] * bilinear(sp, &ls[q], &lu, finite);
                 }
             }
         }
@@ -482,16 +483,20 @@ fn assemble<const N: usize, const G: usize, const A: usize>(
     if let Some(k) = k {
         let flat = kuu.as_flattened().as_flattened().as_flattened();
         // K_uα K_αα⁻¹, then the product with K_αu.
-        let mut kuaa = vec![[0.0; A]; nd];
-        for (row, src) in kuaa.iter_mut().zip(&kua) {
+        let kua = kua.as_flattened();
+        let mut kuaa = [[[0.0; A]; 3]; N];
+        for (row, src) in kuaa.as_flattened_mut().iter_mut().zip(kua) {
             for (q, r) in row.iter_mut().enumerate() {
                 *r = (0..A).map(|a| src[a] * p.kaa[(a, q)]).sum();
             }
         }
+        let kuaa_flat = kuaa.as_flattened();
         for i in 0..nd {
             for j in 0..nd {
-                k[nd * i + j] =
-                    flat[nd * i + j] - (0..A).map(|q| kuaa[i][q] * kau[q][j]).sum::<f64>();
+                k[nd * i + j] = flat[nd * i + j]
+                    - (0..A)
+                        .map(|q| kuaa_flat[i][q] * kau[q].as_flattened()[j])
+                        .sum::<f64>();
             }
         }
     }

@@ -19,22 +19,11 @@
 use super::sheet::Surface;
 use super::{ElemKind, FaceRef, Mesh, TET10_EDGES};
 use std::collections::{BTreeMap, HashMap};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
+/// A line with where it came from (comments dropped): the `.inp` reader's.
+use super::abaqus::Line;
 pub use super::abaqus::Loader;
-
-/// One line with where it came from (comments dropped).
-struct Line {
-    file: std::rc::Rc<PathBuf>,
-    number: usize,
-    text: String,
-}
-
-impl Line {
-    fn at(&self) -> String {
-        format!("{}:{}", self.file.display(), self.number)
-    }
-}
 
 fn lines(path: &Path, load: &Loader, depth: usize, out: &mut Vec<Line>) -> Result<(), String> {
     if depth > 16 {

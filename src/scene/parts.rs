@@ -180,25 +180,19 @@ fn part_mesh(m: &MeshDeck, f: &str, part: u32, deck_dir: &Path) -> Result<Mesh> 
         MeshDeck::Gmsh { file } => gmsh_part(file, f, part, deck_dir),
         MeshDeck::Abaqus { file } => abaqus_part(file, f, part, deck_dir),
         MeshDeck::LsDyna { file } => lsdyna_part(file, f, part, deck_dir),
-        MeshDeck::File { file } => {
-            let ext = Path::new(file)
-                .extension()
-                .and_then(|e| e.to_str())
-                .map(str::to_ascii_lowercase);
-            match ext.as_deref() {
-                Some("msh") => gmsh_part(file, f, part, deck_dir),
-                Some("inp") => abaqus_part(file, f, part, deck_dir),
-                Some("k" | "key" | "dyn") => lsdyna_part(file, f, part, deck_dir),
-                _ => Err(err(
-                    format!("{f}.mesh.file"),
-                    format!(
-                        "`{file}`: kind = \"file\" reads .msh (Gmsh), .inp (Abaqus, CalculiX) \
+        MeshDeck::File { file } => match extension(file).as_deref() {
+            Some("msh") => gmsh_part(file, f, part, deck_dir),
+            Some("inp") => abaqus_part(file, f, part, deck_dir),
+            Some("k" | "key" | "dyn") => lsdyna_part(file, f, part, deck_dir),
+            _ => Err(err(
+                format!("{f}.mesh.file"),
+                format!(
+                    "`{file}`: kind = \"file\" reads .msh (Gmsh), .inp (Abaqus, CalculiX) \
                          and .k, .key, .dyn (LS-DYNA) by their extension; name the kind \
                          (\"gmsh\", \"abaqus\", \"lsdyna\") for another"
-                    ),
-                )),
-            }
-        }
+                ),
+            )),
+        },
     }
 }
 
@@ -508,15 +502,9 @@ fn sheet_part(m: &MeshDeck, f: &str, part: u32, deck_dir: &Path) -> Result<Mesh>
             format!("expected 1 to 64 elements through the thickness, got {layers}"),
         ));
     }
-    let is_k = Path::new(file)
-        .extension()
-        .and_then(|e| e.to_str())
-        .is_some_and(|e| matches!(e.to_ascii_lowercase().as_str(), "k" | "key" | "dyn"));
-    let is_inp = Path::new(file)
-        .extension()
-        .and_then(|e| e.to_str())
-        .is_some_and(|e| e.eq_ignore_ascii_case("inp"));
-    let (path, surface) = if is_inp {
+    let ext = extension(file);
+    let is_k = matches!(ext.as_deref(), Some("k" | "key" | "dyn"));
+    let (path, surface) = if ext.as_deref() == Some("inp") {
         // An Abaqus/CalculiX shell mesh: its errors name the file and line themselves.
         let path = deck_dir.join(file);
         let s = crate::mesh::abaqus::read_surface_inp(&path, &read_text)
@@ -564,6 +552,14 @@ fn abaqus_part(file: &str, f: &str, part: u32, deck_dir: &Path) -> Result<Mesh> 
         .map_err(|e| err(format!("{f}.mesh.file"), e))?;
     compact_unused_nodes(&mut mesh);
     Ok(mesh)
+}
+
+/// A mesh file's extension, lower case: what `kind = "file"` and sheets dispatch on.
+fn extension(file: &str) -> Option<String> {
+    Path::new(file)
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase)
 }
 
 /// The loader of included files for the keyword readers.

@@ -11,7 +11,7 @@
 use crate::fem::element::Formulation;
 use crate::fem::surface::traction_face;
 use crate::mesh::abaqus::{abaqus_face_number, to_abaqus_order};
-use crate::mesh::{ElemKind, Mesh};
+use crate::mesh::{ElemKind, FaceRef, Mesh};
 use crate::model::def::{ContributionDef, MaterialDef, Motion};
 use crate::model::loads::LoadDef;
 use crate::scene::Scene;
@@ -54,6 +54,18 @@ fn element_type(
             }
         }
     }
+}
+
+/// Abaqus' number (S1…) of an alfe face.
+fn face_number(mesh: &Mesh, fr: FaceRef) -> Option<usize> {
+    let kind = mesh.kinds[fr.elem];
+    let en = mesh.elem_nodes(fr.elem);
+    let corners: Vec<usize> = kind
+        .face_corners(fr.face as usize)
+        .iter()
+        .map(|&k| en[k])
+        .collect();
+    abaqus_face_number(kind, en, &corners)
 }
 
 /// Numbers 16 to a line.
@@ -184,13 +196,7 @@ pub fn export_inp(scene: &Scene) -> Exported {
     for (name, faces) in &m.surfaces {
         let _ = writeln!(out, "*SURFACE, NAME={name}, TYPE=ELEMENT");
         for f in faces {
-            let kind = mesh.kinds[f.elem];
-            let corners: Vec<usize> = kind
-                .face_corners(f.face as usize)
-                .iter()
-                .map(|&k| mesh.elem_nodes(f.elem)[k])
-                .collect();
-            if let Some(s) = abaqus_face_number(kind, mesh.elem_nodes(f.elem), &corners) {
+            if let Some(s) = face_number(mesh, *f) {
                 let _ = writeln!(out, "{}, S{s}", f.elem + 1);
             }
         }
@@ -313,14 +319,7 @@ fn write_loads(out: &mut String, scene: &Scene, notes: &mut Vec<String>) {
             } => {
                 let s = curve.eval(end);
                 for fr in m.surfaces.get(surface).into_iter().flatten() {
-                    let kind = m.mesh.kinds[fr.elem];
-                    let en = m.mesh.elem_nodes(fr.elem);
-                    let corners: Vec<usize> = kind
-                        .face_corners(fr.face as usize)
-                        .iter()
-                        .map(|&k| en[k])
-                        .collect();
-                    if let Some(f) = abaqus_face_number(kind, en, &corners) {
+                    if let Some(f) = face_number(&m.mesh, *fr) {
                         pressures.push((fr.elem, f, pressure * s));
                     }
                 }
