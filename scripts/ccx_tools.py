@@ -61,3 +61,28 @@ def compare(out_dir, nodes, ref):
             continue
         worst = max(worst, max(abs(a[k] - v[k]) for k in range(3)))
     return len(ref) - missing, missing, umax, worst / umax
+
+
+def dat_totals(text, nset):
+    """[(time, (fx, fy, fz))] of the `*NODE PRINT, TOTALS=ONLY` blocks of a node set."""
+    out, lines = [], text.splitlines()
+    head = re.compile(r"total force \(fx,fy,fz\) for set (\S+) and time\s+(\S+)")
+    for i, line in enumerate(lines):
+        m = head.search(line)
+        if not m or m.group(1).upper() != nset.upper():
+            continue
+        for row in lines[i + 1:i + 4]:
+            f = row.split()
+            if len(f) == 3:
+                out.append((float(m.group(2)), tuple(float(x) for x in f)))
+                break
+    return out
+
+
+def at_time(series, t):
+    """Linear interpolation of [(time, value)] at t; None outside the times reached."""
+    for (t0, v0), (t1, v1) in zip(series, series[1:]):
+        if t0 - 1e-9 <= t <= t1 + 1e-9:
+            s = 0.0 if t1 == t0 else (t - t0) / (t1 - t0)
+            return v0 + s * (v1 - v0)
+    return None

@@ -446,3 +446,48 @@ fn a_shell_model_imports_as_a_sheet() {
     eprintln!("imported shell plate: tip {uz}, beam theory {beam}");
     assert!((-uz - beam).abs() < 0.03 * beam, "{uz} vs {beam}");
 }
+
+/// A rigid wall exports as a rigid C3D8 layer in a penalty contact pair (CalculiX has no
+/// analytical rigid sphere): hertz-sphere's sphere becomes facets on the sphere (outer
+/// nodes at R, inner ones inside), near the block only, all moved by the wall's 1 mm;
+/// the slave surface is the block's faces under the tracked nodes.
+/// `scripts/ccx-export-compare` runs it in CalculiX: 531 N against alfe's 534 N.
+#[test]
+fn a_rigid_wall_exports_as_a_rigid_layer_in_contact() {
+    let dir = temp_dir("export-wall");
+    let inp = dir.join("hertz.inp");
+    let left = alfe::app::export::export("hertz-sphere", &inp).unwrap();
+    assert!(left.iter().all(|l| !l.contains("sphere")), "{left:?}");
+    let text = std::fs::read_to_string(&inp).unwrap();
+    let block = |head: &str| -> Vec<Vec<String>> {
+        let start = text.find(head).unwrap_or_else(|| panic!("no {head}")) + head.len();
+        text[start..]
+            .lines()
+            .skip(1)
+            .take_while(|l| !l.starts_with('*'))
+            .map(|l| l.split(',').map(|f| f.trim().to_string()).collect())
+            .collect()
+    };
+    let nodes = block("*NODE, NSET=W_sphere_N");
+    let (r, c) = (50.0, [0.0, 0.0, 50.0]);
+    let mut on_surface = 0;
+    for n in &nodes {
+        let x: Vec<f64> = n[1..4].iter().map(|v| v.parse().unwrap()).collect();
+        let d = (0..3).map(|k| (x[k] - c[k]).powi(2)).sum::<f64>().sqrt();
+        assert!(
+            d < r + 1e-9 && d > r - 2.0,
+            "node {n:?} at {d} from the centre"
+        );
+        assert!(x[2] < 20.0, "a facet far from the block: {x:?}");
+        on_surface += usize::from((d - r).abs() < 1e-9);
+    }
+    assert!(on_surface > 1000 && on_surface < nodes.len());
+    let slave = block("*SURFACE, NAME=W_sphere_SLAVE, TYPE=ELEMENT");
+    assert!(
+        !slave.is_empty() && slave.iter().all(|f| f[1] == "S2"),
+        "{slave:?}"
+    );
+    assert!(text.contains("*CONTACT PAIR, INTERACTION=W_sphere_I, TYPE=NODE TO SURFACE\nW_sphere_SLAVE, W_sphere_MASTER"));
+    assert!(text.contains("W_sphere_N, 3, 3, -1.0000000000000e0"));
+    assert!(text.contains("*NODE PRINT, NSET=W_sphere_N, TOTALS=ONLY\nRF"));
+}

@@ -169,6 +169,18 @@ pub fn to_abaqus_order(kind: ElemKind, nodes: &mut [usize]) {
     to_alfe_order(kind, nodes);
 }
 
+/// Abaqus' number (S1…) of an alfe face.
+pub fn face_number(mesh: &Mesh, fr: FaceRef) -> Option<usize> {
+    let kind = mesh.kinds[fr.elem];
+    let en = mesh.elem_nodes(fr.elem);
+    let corners: Vec<usize> = kind
+        .face_corners(fr.face as usize)
+        .iter()
+        .map(|&k| en[k])
+        .collect();
+    abaqus_face_number(kind, en, &corners)
+}
+
 /// The Abaqus face number (1-based, S1…) of a face of an element with alfe-ordered
 /// nodes `en`, given the face's corner nodes; `None` if they are not a face.
 pub fn abaqus_face_number(kind: ElemKind, en: &[usize], corners: &[usize]) -> Option<usize> {

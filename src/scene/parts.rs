@@ -517,8 +517,8 @@ fn sheet_part(m: &MeshDeck, f: &str, part: u32, deck_dir: &Path) -> Result<Mesh>
             .map_err(|e| err(format!("{f}.mesh.file"), e))?;
         (path, s)
     } else {
-        let (path, text) = read_mesh_file(file, f, deck_dir)?;
-        let s = gmsh::read_surface(&text).map_err(|e| {
+        let (path, bytes) = read_mesh_file(file, f, deck_dir)?;
+        let s = gmsh::read_surface_bytes(&bytes).map_err(|e| {
             err(
                 format!("{f}.mesh.file"),
                 format!("`{}`: {e}", path.display()),
@@ -577,8 +577,8 @@ fn lsdyna_part(file: &str, f: &str, part: u32, deck_dir: &Path) -> Result<Mesh> 
 
 /// A `Gmsh` part mesh (see [`part_mesh`]).
 fn gmsh_part(file: &str, f: &str, part: u32, deck_dir: &Path) -> Result<Mesh> {
-    let (path, text) = read_mesh_file(file, f, deck_dir)?;
-    let mut mesh = gmsh::read_msh(&text, part).map_err(|e| {
+    let (path, bytes) = read_mesh_file(file, f, deck_dir)?;
+    let mut mesh = gmsh::read_msh_bytes(&bytes, part).map_err(|e| {
         err(
             format!("{f}.mesh.file"),
             format!("`{}`: {e}", path.display()),
@@ -597,8 +597,9 @@ fn gmsh_part(file: &str, f: &str, part: u32, deck_dir: &Path) -> Result<Mesh> {
     Ok(mesh)
 }
 
-/// A mesh file's path (relative to the deck's directory) and text.
-fn read_mesh_file(file: &str, f: &str, deck_dir: &Path) -> Result<(std::path::PathBuf, String)> {
+/// A mesh file's path (relative to the deck's directory) and bytes: a Gmsh file may be
+/// binary, which the reader tells from its header.
+fn read_mesh_file(file: &str, f: &str, deck_dir: &Path) -> Result<(std::path::PathBuf, Vec<u8>)> {
     let path = if Path::new(file).is_absolute() {
         Path::new(file).to_path_buf()
     } else {
@@ -610,15 +611,7 @@ fn read_mesh_file(file: &str, f: &str, deck_dir: &Path) -> Result<(std::path::Pa
             format!("cannot read `{}`: {e}", path.display()),
         )
     })?;
-    let text = String::from_utf8(bytes).map_err(|e| {
-        let why = if e.as_bytes().starts_with(b"$MeshFormat") {
-            "is a binary .msh file; alfe reads ASCII MSH 4.1 or 2.2 (gmsh -format msh41 -bin 0, Mesh.Binary = 0)"
-        } else {
-            "is not a text file (expected an ASCII Gmsh MSH 4.1 or 2.2 file)"
-        };
-        err(format!("{f}.mesh.file"), format!("`{}` {why}", path.display()))
-    })?;
-    Ok((path, text))
+    Ok((path, bytes))
 }
 
 /// Drop nodes that no element uses (geometry points in Gmsh files): they would carry

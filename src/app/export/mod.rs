@@ -2,6 +2,8 @@
 //! runs in CalculiX (installed here) or reaches an Abaqus user.
 
 pub mod abaqus;
+pub mod contact;
+pub mod rigid;
 
 use crate::{Error, Result};
 use std::path::Path;

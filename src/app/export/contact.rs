@@ -1,0 +1,219 @@
+//! Rigid walls as CalculiX contact: each wall a rigid layer of C3D8 (every node
+//! prescribed with the wall's translation), its outer faces the master surface; the
+//! boundary faces whose nodes the wall tracks the slave surface; a penalty
+//! (`PRESSURE-OVERCLOSURE=LINEAR`) node-to-surface pair with Coulomb friction, one-way
+//! node-to-surface as alfe's walls are (hertz-sphere with C3D8 against alfe's standard
+//! hex8: −0.5 % at 1 mm; CalculiX's surface-to-surface gave +1.9 %). A
+//! penalty pair stands in for alfe's ALM: its penetration is p/K, with K = 50 E/h (h the
+//! slave faces' median edge), 2 % of a cell at p = E (CalculiX's guidance is 5–50 E/h).
+//! Walls that turn, entities with free DOFs and curves other than a ramp are left out.
+
+// Index loops over xyz components read like the formulas.
+#![allow(clippy::needless_range_loop)]
+
+use super::rigid::rigid_layer;
+use crate::mesh::abaqus::face_number;
+use crate::mesh::FaceRef;
+use crate::model::def::{ContributionDef, MaterialDef, ModelDef};
+use crate::model::walls::WallDef;
+use crate::scene::Scene;
+use std::fmt::Write;
+
+/// Penalty stiffness K = PENALTY · E / h.
+const PENALTY: f64 = 50.0;
+
+/// What the walls add: model data (before `*STEP`) and step data.
+#[derive(Default)]
+pub struct WallText {
+    pub model: String,
+    pub step: String,
+}
+
+/// Write every exportable wall; what is left out goes to `notes`.
+pub fn write_walls(scene: &Scene, notes: &mut Vec<String>) -> WallText {
+    let m = &scene.model;
+    let mut out = WallText::default();
+    let (mut next_node, mut next_elem) = (m.mesh.n_nodes(), m.mesh.n_elems());
+    for c in &m.contributions {
+        let ContributionDef::Wall(w) = c else {
+            continue;
+        };
+        if let Err(why) = exportable(w, scene.run.analysis.end_time) {
+            notes.push(format!("rigid wall or entity `{}`: {why}", w.name));
+            continue;
+        }
+        let slave = slave_faces(m, &w.nodes);
+        if slave.is_empty() {
+            notes.push(format!(
+                "rigid wall `{}`: its tracked nodes carry no boundary face (CalculiX's slave surface is made of faces)",
+                w.name
+            ));
+            continue;
+        }
+        write_wall(&mut out, scene, w, &slave, (&mut next_node, &mut next_elem));
+    }
+    out
+}
+
+fn exportable(w: &WallDef, end: f64) -> Result<(), String> {
+    if w.body.is_some() {
+        return Err("an entity with free DOFs (no CalculiX equivalent written)".into());
+    }
+    if w.motion.rotation(end).iter().any(|r| *r != 0.0) {
+        return Err("a turning wall (only translations are written)".into());
+    }
+    for d in w.motion.dofs.iter().flatten() {
+        if d.kind == crate::contact::motion::MotionKind::Velocity || d.curve.points.len() > 2 {
+            return Err("a motion other than a linear ramp over the step".into());
+        }
+    }
+    Ok(())
+}
+
+/// Boundary faces all of whose nodes are tracked.
+fn slave_faces(m: &ModelDef, tracked: &[usize]) -> Vec<FaceRef> {
+    let mut is = vec![false; m.mesh.n_nodes()];
+    for &n in tracked {
+        is[n] = true;
+    }
+    m.mesh
+        .boundary_faces()
+        .into_iter()
+        .filter(|f| m.mesh.face_nodes(*f).iter().all(|&n| is[n]))
+        .collect()
+}
+
+/// The median corner-to-corner edge of the faces.
+fn median_edge(m: &ModelDef, faces: &[FaceRef]) -> f64 {
+    let mut e: Vec<f64> = Vec::new();
+    for f in faces {
+        let kind = m.mesh.kinds[f.elem];
+        let en = m.mesh.elem_nodes(f.elem);
+        let c: Vec<[f64; 3]> = kind
+            .face_corners(f.face as usize)
+            .iter()
+            .map(|&k| m.mesh.coords[en[k]])
+            .collect();
+        for a in 0..c.len() {
+            let b = (a + 1) % c.len();
+            e.push(
+                (0..3)
+                    .map(|k| (c[a][k] - c[b][k]).powi(2))
+                    .sum::<f64>()
+                    .sqrt(),
+            );
+        }
+    }
+    e.sort_by(f64::total_cmp);
+    e[e.len() / 2]
+}
+
+/// A material's small-strain Young's modulus (Mooney–Rivlin: 3μ, μ = 2(C10 + C01)).
+fn young(m: &MaterialDef) -> f64 {
+    match m {
+        MaterialDef::LinearElastic { e, .. }
+        | MaterialDef::NeoHookean { e, .. }
+        | MaterialDef::J2 { e, .. } => *e,
+        MaterialDef::MooneyRivlin { c10, c01, .. } => 6.0 * (c10 + c01),
+    }
+}
+
+/// The box, in the wall's frame, that the tracked nodes sweep between t = 0 and the end
+/// (the wall translates), widened by 15 % of its diagonal and two facets.
+fn reach(m: &ModelDef, w: &WallDef, end: f64, h: f64) -> ([f64; 3], [f64; 3]) {
+    let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+    for t in [0.0, end] {
+        let pose = w.motion.pose(t);
+        for &n in &w.nodes {
+            let x = pose.to_local(m.mesh.coords[n]);
+            for k in 0..3 {
+                lo[k] = lo[k].min(x[k]);
+                hi[k] = hi[k].max(x[k]);
+            }
+        }
+    }
+    let diag = (0..3).map(|k| (hi[k] - lo[k]).powi(2)).sum::<f64>().sqrt();
+    let margin = 0.15 * diag + 2.0 * h;
+    (lo.map(|x| x - margin), hi.map(|x| x + margin))
+}
+
+/// An Abaqus name from an alfe one.
+fn name(s: &str) -> String {
+    s.chars()
+        .map(|c| if c.is_ascii_alphanumeric() { c } else { '_' })
+        .collect()
+}
+
+fn write_wall(
+    out: &mut WallText,
+    scene: &Scene,
+    w: &WallDef,
+    slave: &[FaceRef],
+    (next_node, next_elem): (&mut usize, &mut usize),
+) {
+    let m = &scene.model;
+    let end = scene.run.analysis.end_time;
+    let h = median_edge(m, slave);
+    let (lo, hi) = reach(m, w, end, h);
+    let layer = rigid_layer(&w.shape, lo, hi, h);
+    let pose = w.motion.pose(0.0);
+    let n = name(&w.name);
+    let o = &mut out.model;
+    let _ = writeln!(
+        o,
+        "** rigid wall `{}`: {} facets",
+        w.name,
+        layer.elems.len()
+    );
+    let _ = writeln!(o, "*NODE, NSET=W_{n}_N");
+    for (i, x) in layer.nodes.iter().enumerate() {
+        let g = pose.to_global(*x);
+        let _ = writeln!(
+            o,
+            "{}, {:.13e}, {:.13e}, {:.13e}",
+            *next_node + i + 1,
+            g[0],
+            g[1],
+            g[2]
+        );
+    }
+    let _ = writeln!(o, "*ELEMENT, TYPE=C3D8, ELSET=W_{n}");
+    for (i, e) in layer.elems.iter().enumerate() {
+        let ids: Vec<String> = e.iter().map(|a| (*next_node + a + 1).to_string()).collect();
+        let _ = writeln!(o, "{}, {}", *next_elem + i + 1, ids.join(", "));
+    }
+    *next_node += layer.nodes.len();
+    *next_elem += layer.elems.len();
+    let e_slave = slave
+        .iter()
+        .map(|f| young(&m.materials[m.elem_material(f.elem)].1))
+        .fold(0.0, f64::max);
+    let _ = writeln!(
+        o,
+        "*MATERIAL, NAME=W_{n}_RIGID\n*ELASTIC\n{:.13e}, 0.3\n*SOLID SECTION, ELSET=W_{n}, MATERIAL=W_{n}_RIGID",
+        1e3 * e_slave
+    );
+    let _ = writeln!(o, "*SURFACE, NAME=W_{n}_MASTER, TYPE=ELEMENT\nW_{n}, S2");
+    let _ = writeln!(o, "*SURFACE, NAME=W_{n}_SLAVE, TYPE=ELEMENT");
+    for f in slave {
+        if let Some(s) = face_number(&m.mesh, *f) {
+            let _ = writeln!(o, "{}, S{s}", f.elem + 1);
+        }
+    }
+    let k = PENALTY * e_slave / h;
+    let _ = writeln!(
+        o,
+        "*CONTACT PAIR, INTERACTION=W_{n}_I, TYPE=NODE TO SURFACE\nW_{n}_SLAVE, W_{n}_MASTER\n*SURFACE INTERACTION, NAME=W_{n}_I\n** penalty K = {PENALTY} E/h, E = {e_slave:.6e}, h = {h:.6e}\n*SURFACE BEHAVIOR, PRESSURE-OVERCLOSURE=LINEAR\n{k:.13e}"
+    );
+    if w.friction > 0.0 {
+        // Stick slope: shear stress per slip length, a tenth of the normal stiffness.
+        let _ = writeln!(o, "*FRICTION\n{}, {:.13e}", w.friction, 0.1 * k);
+    }
+    let d = w.motion.displacement(end);
+    let s = &mut out.step;
+    let _ = writeln!(s, "*BOUNDARY");
+    for c in 0..3 {
+        let _ = writeln!(s, "W_{n}_N, {}, {}, {:.13e}", c + 1, c + 1, d[c]);
+    }
+    let _ = writeln!(s, "*NODE PRINT, NSET=W_{n}_N, TOTALS=ONLY\nRF");
+}
