@@ -34,6 +34,7 @@ pub fn write_walls(scene: &Scene, notes: &mut Vec<String>) -> WallText {
     let m = &scene.model;
     let mut out = WallText::default();
     let (mut next_node, mut next_elem) = (m.mesh.n_nodes(), m.mesh.n_elems());
+    let boundary = m.mesh.boundary_faces();
     for c in &m.contributions {
         let ContributionDef::Wall(w) = c else {
             continue;
@@ -42,7 +43,7 @@ pub fn write_walls(scene: &Scene, notes: &mut Vec<String>) -> WallText {
             notes.push(format!("rigid wall or entity `{}`: {why}", w.name));
             continue;
         }
-        let slave = slave_faces(m, &w.nodes);
+        let slave = slave_faces(m, &boundary, &w.nodes);
         if slave.is_empty() {
             notes.push(format!(
                 "rigid wall `{}`: its tracked nodes carry no boundary face (CalculiX's slave surface is made of faces)",
@@ -71,14 +72,14 @@ fn exportable(w: &WallDef, end: f64) -> Result<(), String> {
 }
 
 /// Boundary faces all of whose nodes are tracked.
-fn slave_faces(m: &ModelDef, tracked: &[usize]) -> Vec<FaceRef> {
+fn slave_faces(m: &ModelDef, boundary: &[FaceRef], tracked: &[usize]) -> Vec<FaceRef> {
     let mut is = vec![false; m.mesh.n_nodes()];
     for &n in tracked {
         is[n] = true;
     }
-    m.mesh
-        .boundary_faces()
-        .into_iter()
+    boundary
+        .iter()
+        .copied()
         .filter(|f| m.mesh.face_nodes(*f).iter().all(|&n| is[n]))
         .collect()
 }
@@ -108,14 +109,12 @@ fn median_edge(m: &ModelDef, faces: &[FaceRef]) -> f64 {
     e[e.len() / 2]
 }
 
-/// A material's small-strain Young's modulus (Mooney–Rivlin: 3μ, μ = 2(C10 + C01)).
+/// A material's small-strain Young's modulus, E = 9KG / (3K + G) from the moduli the
+/// material itself reports.
 fn young(m: &MaterialDef) -> f64 {
-    match m {
-        MaterialDef::LinearElastic { e, .. }
-        | MaterialDef::NeoHookean { e, .. }
-        | MaterialDef::J2 { e, .. } => *e,
-        MaterialDef::MooneyRivlin { c10, c01, .. } => 6.0 * (c10 + c01),
-    }
+    let law = m.build();
+    let (k, g) = (law.bulk_modulus(), law.shear_modulus());
+    9.0 * k * g / (3.0 * k + g)
 }
 
 /// The box, in the wall's frame, that the tracked nodes sweep between t = 0 and the end

@@ -8,6 +8,7 @@
 // Index loops over xyz components read like the formulas.
 #![allow(clippy::needless_range_loop)]
 
+use crate::contact::vec3::{cross, dot, norm, scale, sub};
 use crate::contact::wall::ShapeDef;
 use std::f64::consts::{FRAC_PI_2, PI, TAU};
 
@@ -195,7 +196,7 @@ fn add_patch(
                     layer.nodes.push(pts[a]);
                     layer.nodes.len() - 1
                 });
-                layer.nodes.push(sub(pts[a], n.map(|x| x * t)));
+                layer.nodes.push(sub(pts[a], scale(t, n)));
                 e[a] = layer.nodes.len() - 1;
                 e[4 + a] = outer;
             }
@@ -212,26 +213,6 @@ fn centroid(q: &[[f64; 3]; 4]) -> [f64; 3] {
         }
     }
     c
-}
-
-fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-
-fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-
-fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
-
-fn norm(a: [f64; 3]) -> f64 {
-    dot(a, a).sqrt()
 }
 
 #[cfg(test)]
