@@ -42,9 +42,9 @@ enum Command {
         #[command(flatten)]
         study: StudyArgs,
     },
-    /// Translate an Abaqus/CalculiX input file (.inp) into an alfe deck: the mesh stays
-    /// in the file; every keyword not translated is listed with its line, in the deck
-    /// and on stderr.
+    /// Translate an Abaqus/CalculiX input file (.inp) or an LS-DYNA keyword file (.k) into
+    /// an alfe deck: the mesh stays in the file; every keyword not translated is listed
+    /// with its line, in the deck and on stderr.
     Import {
         /// The input file.
         file: PathBuf,
@@ -52,12 +52,12 @@ enum Command {
         #[arg(short, long, value_name = "DECK")]
         out: Option<PathBuf>,
     },
-    /// Write a built-in scene or a deck as an Abaqus/CalculiX input file (.inp), for
-    /// CalculiX or an Abaqus user; what has no equivalent is listed.
+    /// Write a built-in scene or a deck as an Abaqus/CalculiX input file (.inp) or an
+    /// LS-DYNA keyword file (.k), by the extension; what has no equivalent is listed.
     Export {
         /// Built-in scene name or deck path.
         target: String,
-        /// The .inp file to write.
+        /// The .inp or .k file to write.
         #[arg(short, long, value_name = "FILE")]
         out: PathBuf,
     },

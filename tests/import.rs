@@ -305,7 +305,7 @@ bottom
 #[test]
 fn fuzzed_keyword_files_never_panic_and_refusals_name_a_line() {
     fuzz(K_FILE, "bar.k", &|load| {
-        vec![alfe::mesh::lsdyna::read_k(Path::new("bar.k"), 0, load).map(|_| ())]
+        vec![alfe::mesh::lsdyna::read_k(Path::new("bar.k"), 0, None, load).map(|_| ())]
     });
 }
 
@@ -323,7 +323,7 @@ fn real_lsdyna_files_read() {
         return;
     }
     let load = |p: &Path| std::fs::read_to_string(p).map_err(|e| format!("{}: {e}", p.display()));
-    let bar = alfe::mesh::lsdyna::read_k(&dir.join("taylor_bar_mesh.k"), 0, &load).unwrap();
+    let bar = alfe::mesh::lsdyna::read_k(&dir.join("taylor_bar_mesh.k"), 0, None, &load).unwrap();
     assert_eq!(bar.n_elems(), 768);
     assert!(bar.kinds.iter().all(|&k| k == alfe::mesh::ElemKind::Hex8));
     let vol: f64 = (0..bar.n_elems()).map(|e| bar.elem_volume(e)).sum();

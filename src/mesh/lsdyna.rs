@@ -25,6 +25,20 @@ use std::path::Path;
 use super::abaqus::Line;
 pub use super::abaqus::Loader;
 
+/// The lines of `path` and its `*INCLUDE`s, comments dropped except `$alfe` lines: an
+/// exported file keeps there the alfe choices LS-DYNA has no field for (LS-DYNA reads
+/// them as comments; `alfe import` reads them; the mesh reader skips them).
+pub fn read_lines_k(path: &Path, load: &Loader) -> Result<Vec<Line>, String> {
+    let mut out = Vec::new();
+    lines(path, load, 0, &mut out)?;
+    Ok(out)
+}
+
+/// Whether a kept line is an `$alfe` note.
+pub fn is_alfe_note(t: &str) -> bool {
+    t.starts_with("$alfe")
+}
+
 fn lines(path: &Path, load: &Loader, depth: usize, out: &mut Vec<Line>) -> Result<(), String> {
     if depth > 16 {
         return Err(format!(
@@ -37,7 +51,7 @@ fn lines(path: &Path, load: &Loader, depth: usize, out: &mut Vec<Line>) -> Resul
     let mut include_next = false;
     for (i, raw) in text.lines().enumerate() {
         let t = raw.trim_end();
-        if t.trim().is_empty() || t.starts_with('$') {
+        if t.trim().is_empty() || (t.starts_with('$') && !is_alfe_note(t)) {
             continue;
         }
         let line = Line {
@@ -62,7 +76,7 @@ fn lines(path: &Path, load: &Loader, depth: usize, out: &mut Vec<Line>) -> Resul
 }
 
 /// A keyword line's name (upper case, without `*`, options and the `+`/`%` format marks).
-fn keyword(t: &str) -> Option<(String, bool)> {
+pub fn keyword(t: &str) -> Option<(String, bool)> {
     let rest = t.trim_start().strip_prefix('*')?;
     let word = rest.split_whitespace().next().unwrap_or("");
     let long = word.ends_with('+') || rest.contains(" +");
@@ -73,7 +87,7 @@ fn keyword(t: &str) -> Option<(String, bool)> {
 }
 
 /// The fields of a data line: comma-separated, or fixed `widths` (the last repeated).
-fn split<'a>(t: &'a str, widths: &[usize]) -> Vec<&'a str> {
+pub fn split<'a>(t: &'a str, widths: &[usize]) -> Vec<&'a str> {
     if t.contains(',') {
         return t.split(',').map(str::trim).collect();
     }
@@ -93,7 +107,8 @@ fn split<'a>(t: &'a str, widths: &[usize]) -> Vec<&'a str> {
     out
 }
 
-fn int(s: &str, line: &Line, what: &str) -> Result<i64, String> {
+/// An integer field (blank: 0).
+pub fn int(s: &str, line: &Line, what: &str) -> Result<i64, String> {
     if s.is_empty() {
         return Ok(0);
     }
@@ -106,7 +121,8 @@ fn int(s: &str, line: &Line, what: &str) -> Result<i64, String> {
     })
 }
 
-fn real(s: &str, line: &Line) -> Result<f64, String> {
+/// A real field (blank: 0; Fortran exponents `1.5-3` too).
+pub fn real(s: &str, line: &Line) -> Result<f64, String> {
     if s.is_empty() {
         return Ok(0.0);
     }
@@ -245,8 +261,10 @@ fn set_card(raw: &mut Raw, block: Block, line: &Line) -> Result<(), String> {
 
 /// Parse every block of `path` and its includes.
 fn parse(path: &Path, load: &Loader) -> Result<Raw, String> {
-    let mut all = Vec::new();
-    lines(path, load, 0, &mut all)?;
+    let all: Vec<Line> = read_lines_k(path, load)?
+        .into_iter()
+        .filter(|l| !is_alfe_note(&l.text))
+        .collect();
     let mut raw = Raw::default();
     let mut block = Block::Skip;
     let mut long = false;
@@ -434,10 +452,22 @@ fn flip(kind: ElemKind, n: &mut [usize]) {
     }
 }
 
-/// Read `path` (with its includes) as the mesh of deck part `part`: its solids; shells
-/// are refused here (a sheet reads them).
-pub fn read_k(path: &Path, part: u32, load: &Loader) -> Result<Mesh, String> {
-    let raw = parse(path, load)?;
+/// Read `path` (with its includes) as the mesh of deck part `part`: its solids, or only
+/// those of LS-DYNA part `pid` (one alfe part per LS-DYNA part, each with its own
+/// material: node sets and segments then keep what lies in that part); shells are
+/// refused here (a sheet reads them). Nodes no kept solid uses stay in the mesh (the
+/// scene drops them).
+pub fn read_k(path: &Path, part: u32, pid: Option<i64>, load: &Loader) -> Result<Mesh, String> {
+    let mut raw = parse(path, load)?;
+    if let Some(p) = pid {
+        raw.solids.retain(|s| s.1 == p);
+        if raw.solids.is_empty() {
+            return Err(format!(
+                "{}: no *ELEMENT_SOLID belongs to part {p}",
+                path.display()
+            ));
+        }
+    }
     if let Some((eid, _, _, at)) = raw.shells.first() {
         if raw.solids.is_empty() {
             return Err(format!(
@@ -500,9 +530,14 @@ pub fn read_k(path: &Path, part: u32, load: &Loader) -> Result<Mesh, String> {
                 .collect::<Result<_, _>>()?;
             key.sort_unstable();
             key.dedup();
-            let f = faces.get(&key).ok_or_else(|| {
-                format!("{at}: a segment of set {name} (nodes {s:?}) is not a face of any solid")
-            })?;
+            let Some(f) = faces.get(&key) else {
+                if pid.is_some() {
+                    continue; // a face of another part
+                }
+                return Err(format!(
+                    "{at}: a segment of set {name} (nodes {s:?}) is not a face of any solid"
+                ));
+            };
             fs.push(*f);
             mesh.node_groups
                 .entry(name.clone())
@@ -604,7 +639,7 @@ mod tests {
                 .map(|(_, t)| t.to_string())
                 .ok_or_else(|| format!("{}: no such file", p.display()))
         };
-        read_k(Path::new(files[0].0), 1, &load)
+        read_k(Path::new(files[0].0), 1, None, &load)
     }
 
     /// A unit cube's corners (nodes 1–8) and a ninth node above it, fixed width.

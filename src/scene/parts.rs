@@ -179,11 +179,11 @@ fn part_mesh(m: &MeshDeck, f: &str, part: u32, deck_dir: &Path) -> Result<Mesh> 
         MeshDeck::Sheet { .. } => sheet_part(m, f, part, deck_dir),
         MeshDeck::Gmsh { file } => gmsh_part(file, f, part, deck_dir),
         MeshDeck::Abaqus { file } => abaqus_part(file, f, part, deck_dir),
-        MeshDeck::LsDyna { file } => lsdyna_part(file, f, part, deck_dir),
+        MeshDeck::LsDyna { file, pid } => lsdyna_part(file, *pid, f, part, deck_dir),
         MeshDeck::File { file } => match extension(file).as_deref() {
             Some("msh") => gmsh_part(file, f, part, deck_dir),
             Some("inp") => abaqus_part(file, f, part, deck_dir),
-            Some("k" | "key" | "dyn") => lsdyna_part(file, f, part, deck_dir),
+            Some("k" | "key" | "dyn") => lsdyna_part(file, None, f, part, deck_dir),
             _ => Err(err(
                 format!("{f}.mesh.file"),
                 format!(
@@ -568,8 +568,8 @@ fn read_text(p: &Path) -> std::result::Result<String, String> {
 }
 
 /// An LS-DYNA `.k` part mesh (see [`part_mesh`]).
-fn lsdyna_part(file: &str, f: &str, part: u32, deck_dir: &Path) -> Result<Mesh> {
-    let mut mesh = crate::mesh::lsdyna::read_k(&deck_dir.join(file), part, &read_text)
+fn lsdyna_part(file: &str, pid: Option<i64>, f: &str, part: u32, deck_dir: &Path) -> Result<Mesh> {
+    let mut mesh = crate::mesh::lsdyna::read_k(&deck_dir.join(file), part, pid, &read_text)
         .map_err(|e| err(format!("{f}.mesh.file"), e))?;
     compact_unused_nodes(&mut mesh);
     Ok(mesh)

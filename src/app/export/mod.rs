@@ -3,25 +3,29 @@
 
 pub mod abaqus;
 pub mod contact;
+pub mod lsdyna;
 pub mod rigid;
 
 use crate::{Error, Result};
 use std::path::Path;
 
-/// Export the built-in scene or deck `target` to `out` (`.inp`); what was left out.
+/// Export the built-in scene or deck `target` to `out` (`.inp` or `.k`); what was left out.
 pub fn export(target: &str, out: &Path) -> Result<Vec<String>> {
     let ext = out
         .extension()
         .and_then(|e| e.to_str())
         .map(str::to_ascii_lowercase);
-    if ext.as_deref() != Some("inp") {
-        return Err(Error::input(format!(
-            "`{}`: alfe exports Abaqus/CalculiX input files (.inp); LS-DYNA keyword files are not written yet",
-            out.display()
-        )));
-    }
     let scene = crate::scene::read(&crate::scene::load(target)?)?;
-    let e = abaqus::export_inp(&scene);
+    let e = match ext.as_deref() {
+        Some("inp") => abaqus::export_inp(&scene),
+        Some("k" | "key" | "dyn") => lsdyna::export_k(&scene),
+        _ => {
+            return Err(Error::input(format!(
+                "`{}`: alfe exports Abaqus/CalculiX input files (.inp) and LS-DYNA keyword files (.k, .key, .dyn), chosen by the extension",
+                out.display()
+            )))
+        }
+    };
     std::fs::write(out, &e.text)
         .map_err(|err| Error::input(format!("cannot write `{}`: {err}", out.display())))?;
     Ok(e.left_out)

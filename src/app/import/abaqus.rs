@@ -556,7 +556,7 @@ pub fn import_inp(path: &Path, deck_path: &Path, load: &Loader) -> Result<Import
 }
 
 /// A path as the deck should name it: relative to the deck's directory where it can be.
-fn relative(file: &Path, deck_path: &Path) -> String {
+pub(super) fn relative(file: &Path, deck_path: &Path) -> String {
     let dir = deck_path
         .parent()
         .filter(|d| !d.as_os_str().is_empty())
@@ -569,7 +569,7 @@ fn relative(file: &Path, deck_path: &Path) -> String {
         .unwrap_or_else(|_| file_abs.display().to_string())
 }
 
-fn toml_str(s: &str) -> String {
+pub(super) fn toml_str(s: &str) -> String {
     format!("{:?}", s)
 }
 

@@ -4,6 +4,10 @@
 //! writes is one `alfe run` takes.
 
 pub mod abaqus;
+mod keyword_blocks;
+pub mod lsdyna;
+mod lsdyna_materials;
+mod lsdyna_walls;
 
 use crate::scene::{read, Source};
 use crate::{Error, Result};
@@ -29,9 +33,10 @@ pub fn import(file: &Path, out: &Path) -> Result<Report> {
     };
     let imported = match ext.as_deref() {
         Some("inp") => abaqus::import_inp(file, out, &load).map_err(Error::input)?,
+        Some("k" | "key" | "dyn") => lsdyna::import_k(file, out, &load).map_err(Error::input)?,
         _ => {
             return Err(Error::input(format!(
-                "`{}`: alfe imports Abaqus/CalculiX input files (.inp); LS-DYNA keyword files are not read yet",
+                "`{}`: alfe imports Abaqus/CalculiX input files (.inp) and LS-DYNA keyword files (.k, .key, .dyn), by their extension",
                 file.display()
             )))
         }

@@ -362,9 +362,14 @@ pub enum MeshDeck {
     Abaqus { file: String },
     /// An LS-DYNA keyword file (`.k`): `*NODE`, `*ELEMENT_SOLID` (hex8, degenerate
     /// tets and wedges, 10-node tets), `*PART` (groups by title), `*SET_NODE_LIST`,
-    /// `*SET_SEGMENT`, `*INCLUDE`.
+    /// `*SET_SEGMENT`, `*INCLUDE`. `pid`: only that LS-DYNA part's solids (one alfe part
+    /// per LS-DYNA part, each with its own material); default all of them.
     #[serde(rename = "lsdyna")]
-    LsDyna { file: String },
+    LsDyna {
+        file: String,
+        #[serde(default)]
+        pid: Option<i64>,
+    },
     /// A mesh file of the kind its extension says: `.msh` Gmsh, `.inp` Abaqus, `.k`
     /// (`.key`, `.dyn`) LS-DYNA.
     File { file: String },
