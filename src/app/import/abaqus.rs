@@ -573,7 +573,8 @@ pub(super) fn toml_str(s: &str) -> String {
     format!("{:?}", s)
 }
 
-const XYZ: [&str; 3] = ["x", "y", "z"];
+/// Deck component names by index.
+pub(super) const XYZ: [&str; 3] = ["x", "y", "z"];
 
 fn write_material(
     out: &mut String,

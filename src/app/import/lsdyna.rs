@@ -22,7 +22,7 @@
 //! extends LENP behind the wall; a cylinder's tail is on its axis at one end, a sphere's
 //! its centre.
 
-use super::abaqus::{relative, toml_str, Imported};
+use super::abaqus::{relative, toml_str, Imported, XYZ};
 use super::keyword_blocks::{blocks, Block};
 use crate::mesh::abaqus::Loader;
 use crate::mesh::lsdyna::{int, read_lines_k, real, split};
@@ -269,11 +269,10 @@ fn define_curve(m: &mut Model, b: &Block, titled: bool) -> Result<(), String> {
     let (sfa, sfo) = (or1(b.real(first, 2)?), or1(b.real(first, 3)?));
     let (offa, offo) = (b.real(first, 4)?, b.real(first, 5)?);
     let mut pts = Vec::new();
-    for (k, l) in b.data.iter().enumerate().skip(first + 1) {
+    for l in b.data.iter().skip(first + 1) {
         let f = split(&l.text, &[20]);
         let a = real(f.first().copied().unwrap_or(""), l)?;
         let o = real(f.get(1).copied().unwrap_or(""), l)?;
-        let _ = k;
         pts.push([sfa * a + offa, sfo * o + offo]);
     }
     if pts.is_empty() {
@@ -304,8 +303,6 @@ fn material(m: &mut Model, b: &Block) -> Result<(), String> {
     }
     Ok(())
 }
-
-const XYZ: [&str; 3] = ["x", "y", "z"];
 
 /// Supports, motions, loads, walls, velocities and controls.
 fn model_keyword(m: &mut Model, b: &Block) -> Result<(), String> {
