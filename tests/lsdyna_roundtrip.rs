@@ -243,6 +243,18 @@ fn same_walls(a: &Scene, b: &Scene) {
             "{}",
             x.name
         );
+        assert_eq!(x.friction_threshold, y.friction_threshold, "{}", x.name);
+        assert!(close(x.tangential_augmentation, y.tangential_augmentation));
+        match (&x.body, &y.body) {
+            (None, None) => {}
+            (Some(p), Some(q)) => {
+                assert_eq!(p.free, q.free, "{}: free DOFs", x.name);
+                assert_eq!(p.trace, q.trace, "{}: traced points", x.name);
+                assert!(close(p.mass, q.mass) && close(p.inertia, q.inertia));
+                assert!(close(p.length, q.length), "{}", x.name);
+            }
+            _ => panic!("{}: an entity on one side only", x.name),
+        }
         let (mut na, mut nb) = (x.nodes.clone(), y.nodes.clone());
         na.sort_unstable();
         nb.sort_unstable();
@@ -308,18 +320,25 @@ fn same_model(name: &str, a: &Scene, b: &Scene) {
     }
     let (s, t) = (&a.run.solver, &b.run.solver);
     assert_eq!(
-        (s.kind, s.max_iterations),
-        (t.kind, t.max_iterations),
+        (s.kind, s.max_iterations, s.line_search, s.bfgs_reform),
+        (t.kind, t.max_iterations, t.line_search, t.bfgs_reform),
         "{name}"
     );
 }
 
-/// The paper scenes LS-DYNA can hold without entities, pairs or couplings, as `.k`
-/// files under `examples/paper/`, import to the built-in models.
+/// The paper scenes as `.k` files under `examples/paper/` (the entities as
+/// `*CONTACT_ENTITY` on rigid parts) import to the built-in models.
 #[test]
 fn paper_examples_import_to_the_built_in_models() {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/paper");
-    for name in ["taylor-bar", "clip-tensile", "rubber-indent", "b-pillar"] {
+    for name in [
+        "taylor-bar",
+        "clip-tensile",
+        "rubber-indent",
+        "sphere-roll",
+        "panel-dent",
+        "b-pillar",
+    ] {
         let k = dir.join(format!("{name}.k"));
         let deck = temp_dir(&format!("paper-{name}")).join(format!("{name}.toml"));
         alfe::app::import::import(&k, &deck).unwrap_or_else(|e| panic!("{name}: {e}"));

@@ -221,6 +221,7 @@ pub fn export_k(scene: &Scene) -> Exported {
     }
     write_segments(&mut out, scene);
     let mut model = String::new();
+    write_entities(&mut out, &mut model, scene, &mut ids, &mut notes);
     write_constraints(&mut model, scene, &mut ids, &mut notes);
     write_loads(&mut model, scene, &mut ids, &mut notes);
     write_walls(&mut model, scene, &mut ids, &mut notes);
@@ -471,7 +472,6 @@ fn write_walls(out: &mut String, scene: &Scene, ids: &mut Ids, notes: &mut Vec<S
             continue;
         };
         if w.body.is_some() {
-            notes.push(format!("contact entity `{}` (free DOFs)", w.name));
             continue;
         }
         let Some((shape, t, h, shape_card)) = wall_geometry(w) else {
@@ -533,6 +533,53 @@ fn write_walls(out: &mut String, scene: &Scene, ids: &mut Ids, notes: &mut Vec<S
     }
 }
 
+impl super::lsdyna_entities::Numbering for Ids {
+    fn curve(&mut self, c: &Curve) -> usize {
+        Ids::curve(self, c)
+    }
+    fn set(&mut self, name: &str, nodes: &[usize]) -> usize {
+        Ids::set(self, name, nodes)
+    }
+}
+
+/// Contact entities as rigid parts numbered after the model's parts and materials (see
+/// [`super::lsdyna_entities`]).
+fn write_entities(
+    defs: &mut String,
+    model: &mut String,
+    scene: &Scene,
+    ids: &mut Ids,
+    notes: &mut Vec<String>,
+) {
+    let m = &scene.model;
+    // LS-DYNA's rigid contact stiffness: the stiffest material's E = 9KG / (3K + G).
+    let e = m.materials.iter().fold(0.0_f64, |a, (_, d)| {
+        let law = d.build();
+        let (k, g) = (law.bulk_modulus(), law.shear_modulus());
+        a.max(9.0 * k * g / (3.0 * k + g))
+    });
+    let mut next = (m.part_names.len(), m.materials.len());
+    for c in &m.contributions {
+        let ContributionDef::Wall(w) = c else {
+            continue;
+        };
+        let Some(b) = &w.body else {
+            continue;
+        };
+        next = (next.0 + 1, next.1 + 1);
+        if b.mass == 0.0 {
+            notes.push(format!(
+                "contact entity `{}`: massless (alfe's static body): *PART_INERTIA TM = 0, which an LS-DYNA run needs set",
+                w.name
+            ));
+        }
+        let r = super::lsdyna_entities::write_entity(w, (next.0, next.1, e), ids, defs, model);
+        if let Err(why) = r {
+            notes.push(format!("contact entity `{}`: {why}", w.name));
+        }
+    }
+}
+
 /// Initial velocities on node sets (a part's as a set of its nodes).
 fn write_initial_velocity(out: &mut String, scene: &Scene, ids: &mut Ids) {
     let m = &scene.model;
@@ -583,4 +630,23 @@ fn write_controls(out: &mut String, scene: &Scene) {
     let ilimit = if s.kind.name() == "newton" { 1 } else { 11 };
     card(out, &[i(12), i(ilimit), i(s.max_iterations)]);
     let _ = writeln!(out, "$alfe nonlinear = \"{}\"", s.kind.name());
+    // The settings LS-DYNA's cards do not say as alfe means them, where not alfe's
+    // defaults.
+    let d = crate::scene::deck::SolverDeck::default();
+    if s.line_search {
+        out.push_str("$alfe line_search = true\n");
+    }
+    for (key, v, dv) in [
+        ("residual_rtol", s.residual_rtol, d.residual_rtol),
+        ("increment_rtol", s.increment_rtol, d.increment_rtol),
+        ("energy_rtol", s.energy_rtol, d.energy_rtol),
+        ("fd_delta", s.fd_delta, d.fd_delta),
+    ] {
+        if v != dv {
+            let _ = writeln!(out, "$alfe {key} = {v:e}");
+        }
+    }
+    if s.bfgs_reform != d.bfgs_reform {
+        let _ = writeln!(out, "$alfe bfgs_reform = {}", s.bfgs_reform);
+    }
 }

@@ -72,6 +72,9 @@ struct Model {
     dynamics: Option<(String, Option<String>)>,
     /// (nonlinear, max iterations)
     solver: Option<(String, i64)>,
+    entities: super::lsdyna_entities::Entities,
+    /// `[solver]` lines from `$alfe` notes.
+    solver_notes: Vec<String>,
     untranslated: Vec<String>,
 }
 
@@ -120,6 +123,7 @@ pub fn import_k(path: &Path, deck_path: &Path, load: &Loader) -> Result<Imported
     for b in &bs {
         model_keyword(&mut m, b)?;
     }
+    entities(&mut m)?;
     if m.solid_pids.is_empty() && m.shell_pids.is_empty() {
         return Err(format!(
             "{}: the file has no *ELEMENT_SOLID or *ELEMENT_SHELL",
@@ -137,6 +141,9 @@ pub fn import_k(path: &Path, deck_path: &Path, load: &Loader) -> Result<Imported
 
 /// Title, parts, sections, sets, curves, materials and element part numbers.
 fn define(m: &mut Model, b: &Block) -> Result<(), String> {
+    if m.entities.define(b)? {
+        return Ok(());
+    }
     let kw = b.kw.as_str();
     let titled = kw.ends_with("_TITLE");
     match kw.trim_end_matches("_TITLE") {
@@ -310,7 +317,11 @@ fn model_keyword(m: &mut Model, b: &Block) -> Result<(), String> {
     if kw.starts_with("RIGIDWALL_GEOMETRIC_") || kw.starts_with("RIGIDWALL_PLANAR") {
         return rigidwall(m, b);
     }
-    if supports_and_loads(m, b)? || initial_velocity(m, b)? || controls(m, b)? {
+    if supports_and_loads(m, b)?
+        || initial_velocity(m, b)?
+        || controls(m, b)?
+        || m.entities.keyword(b)?
+    {
         return Ok(());
     }
     match kw {
@@ -319,6 +330,7 @@ fn model_keyword(m: &mut Model, b: &Block) -> Result<(), String> {
         | "TITLE"
         | "NODE"
         | "PART"
+        | "PART_INERTIA"
         | "SECTION_SOLID"
         | "SECTION_SHELL"
         | "ELEMENT_SOLID"
@@ -484,6 +496,11 @@ fn controls(m: &mut Model, b: &Block) -> Result<bool, String> {
                 str::to_string,
             );
             m.solver = Some((kind, b.int(0, 2)?));
+            for key in SOLVER_NOTES {
+                if let Some(v) = b.note(key) {
+                    m.solver_notes.push(format!("{key} = {v}"));
+                }
+            }
         }
         _ => return Ok(false),
     }
@@ -510,6 +527,46 @@ fn rigidwall(m: &mut Model, b: &Block) -> Result<(), String> {
             m.tables.push(table);
         }
         Err(why) => m.skip(b, &why),
+    }
+    Ok(())
+}
+
+/// The `[solver]` settings `alfe export` writes as notes.
+const SOLVER_NOTES: [&str; 6] = [
+    "line_search",
+    "residual_rtol",
+    "increment_rtol",
+    "energy_rtol",
+    "fd_delta",
+    "bfgs_reform",
+];
+
+/// The contact entities' tables, their node sets and curves named (see
+/// [`super::lsdyna_entities`]).
+fn entities(m: &mut Model) -> Result<(), String> {
+    let (tables, skipped) = std::mem::take(&mut m.entities).tables();
+    m.untranslated.extend(skipped);
+    for t in tables {
+        let set = m.node_sets.get(&t.nsid).cloned().ok_or_else(|| {
+            format!(
+                "{}: *CONTACT_ENTITY names node set {}, which the file does not define",
+                t.at, t.nsid
+            )
+        })?;
+        if !m.used_sets.contains(&set) {
+            m.used_sets.push(set.clone());
+        }
+        let mut text = t.text.replace("@NODES", &toml_str(&set));
+        for c in t.lcids {
+            let name = m.curves.get(&c).map(|x| x.0.clone()).ok_or_else(|| {
+                format!("{}: a rigid-body motion or load of this entity names curve {c}, which no *DEFINE_CURVE defines", t.at)
+            })?;
+            if !m.used_curves.contains(&c) {
+                m.used_curves.push(c);
+            }
+            text = text.replace(&format!("@CURVE{c}@"), &toml_str(&name));
+        }
+        m.tables.push(text);
     }
     Ok(())
 }
@@ -767,6 +824,9 @@ fn write_analysis(m: &Model, out: &mut String, untranslated: &mut Vec<String>) {
         let _ = writeln!(out, "\n[solver]\nnonlinear = {kind}");
         if *maxit > 0 {
             let _ = writeln!(out, "max_iterations = {maxit}");
+        }
+        for l in &m.solver_notes {
+            let _ = writeln!(out, "{l}");
         }
     }
 }

@@ -6,6 +6,7 @@
 pub mod abaqus;
 mod keyword_blocks;
 pub mod lsdyna;
+mod lsdyna_entities;
 mod lsdyna_materials;
 mod lsdyna_walls;
 
