@@ -103,6 +103,15 @@ impl Ids {
     }
 }
 
+impl super::lsdyna_pairs::Numbering for Ids {
+    fn set(&mut self, name: &str, nodes: &[usize]) -> usize {
+        Ids::set(self, name, nodes)
+    }
+    fn curve(&mut self, c: &Curve) -> usize {
+        Ids::curve(self, c)
+    }
+}
+
 /// An LS-DYNA solid's node list (1-based) from an alfe element: tets and wedges as
 /// degenerate hexes, the tet10's midside nodes in LS-DYNA's edge order.
 fn solid_nodes(kind: ElemKind, n: &[usize]) -> Vec<usize> {
@@ -223,6 +232,13 @@ pub fn export_k(scene: &Scene) -> Exported {
     let mut model = String::new();
     write_constraints(&mut model, scene, &mut ids, &mut notes);
     write_loads(&mut model, scene, &mut ids, &mut notes);
+    let surface_ids: BTreeMap<&str, usize> = m
+        .surfaces
+        .keys()
+        .enumerate()
+        .map(|(k, n)| (n.as_str(), k + 1))
+        .collect();
+    super::lsdyna_pairs::write(&mut model, scene, &surface_ids, &mut ids);
     write_walls(&mut model, scene, &mut ids, &mut notes);
     write_initial_velocity(&mut model, scene, &mut ids);
     write_controls(&mut model, scene);
@@ -381,9 +397,9 @@ fn write_loads(out: &mut String, scene: &Scene, ids: &mut Ids, notes: &mut Vec<S
             ContributionDef::Load(LoadDef::Traction { surface, .. }) => notes.push(format!(
                 "the traction on `{surface}` (LS-DYNA's segment loads are pressures)"
             )),
-            ContributionDef::Wall(_) => {}
-            ContributionDef::Coupling(_) => notes.push("a coupling".into()),
-            ContributionDef::Pairs(p) => notes.push(format!("small-sliding pairs `{}`", p.name)),
+            // Written by `lsdyna_pairs` and `write_walls`.
+            ContributionDef::Wall(_) | ContributionDef::Coupling(_) | ContributionDef::Pairs(_) => {
+            }
         }
     }
 }
@@ -561,6 +577,7 @@ fn write_controls(out: &mut String, scene: &Scene) {
     let a = &scene.run.analysis;
     out.push_str("*CONTROL_TERMINATION +\n");
     card(out, &[r(a.end_time)]);
+    super::lsdyna_pairs::write_steps(out, scene);
     if a.kind == AnalysisKind::Explicit {
         return;
     }

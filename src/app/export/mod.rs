@@ -4,6 +4,7 @@
 pub mod abaqus;
 pub mod contact;
 pub mod lsdyna;
+pub mod lsdyna_pairs;
 pub mod rigid;
 
 use crate::{Error, Result};

@@ -7,6 +7,7 @@ pub mod abaqus;
 mod keyword_blocks;
 pub mod lsdyna;
 mod lsdyna_materials;
+mod lsdyna_pairs;
 mod lsdyna_walls;
 
 use crate::scene::{read, Source};
