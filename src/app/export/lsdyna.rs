@@ -9,9 +9,10 @@
 //!
 //! Where LS-DYNA has no field for an alfe choice (the element formulation, the contact
 //! method, the time integrator), the exporter writes it on an `$alfe key = value` line
-//! after the card: LS-DYNA reads a comment, `alfe import` the value. What has no
-//! equivalent at all (tractions, rotations, entities, pairs, couplings, ellipsoid and
-//! torus walls, turning walls) is listed in the header and returned.
+//! after the card: LS-DYNA reads a comment, `alfe import` the value. Small-sliding
+//! pairs, bolts, couplings and steps are written by [`super::lsdyna_pairs`]. What has no
+//! equivalent at all (tractions, rotations, entities, ellipsoid and torus walls, turning
+//! walls) is listed in the header and returned.
 
 // Index loops over xyz components read like the formulas.
 #![allow(clippy::needless_range_loop)]

@@ -2,6 +2,7 @@
 //! runs in CalculiX (installed here) or reaches an Abaqus user.
 
 pub mod abaqus;
+pub mod abaqus_pairs;
 pub mod contact;
 pub mod lsdyna;
 pub mod lsdyna_pairs;
