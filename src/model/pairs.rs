@@ -51,6 +51,13 @@ pub struct PairsDef {
     pub pairs: Vec<Pair>,
     /// Tracked nodes left without a pair (no reference face within reach).
     pub unpaired: usize,
+    /// The deck's pairing choices, kept so that `alfe export` can write the deck back:
+    /// its search distance (None: the default) and whether the weights are mortar
+    /// integrals (else node-to-face).
+    #[serde(default)]
+    pub search_distance: Option<f64>,
+    #[serde(default)]
+    pub mortar: bool,
     /// A bolt's pretension section: tied pairs whose normal gap is shifted by one global
     /// unknown s, the section's shortening.
     #[serde(default)]

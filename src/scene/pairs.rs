@@ -252,6 +252,8 @@ fn build_one(d: &PairsDeck, f: &str, ctx: &Context) -> Result<PairsDef> {
         reference: d.reference.clone(),
         pairs,
         unpaired,
+        search_distance: d.search_distance,
+        mortar: weights == Weights::Mortar,
         pretension: None,
     })
 }

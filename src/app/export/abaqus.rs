@@ -216,17 +216,18 @@ pub fn export_inp(scene: &Scene) -> Exported {
     if a.kind != AnalysisKind::Static {
         notes.push("the analysis is dynamic: written as a static step".into());
     }
-    let _ = writeln!(
-        out,
-        "*STEP{}, INC=10000\n*STATIC\n{:.13e}, {:.13e}",
-        if finite { ", NLGEOM" } else { "" },
-        a.step,
-        a.end_time
-    );
-    write_supports(&mut out, scene, &mut notes);
-    write_loads(&mut out, scene, &mut notes);
-    out += &walls.step;
-    let _ = writeln!(out, "*NODE PRINT, NSET=NALL\nU\n*END STEP");
+    let extra = super::abaqus_pairs::write(scene, &mut notes);
+    out += &extra.model;
+    for (k, (head, body)) in extra.steps.iter().enumerate() {
+        out += &head.replace("{NLGEOM}", if finite { ", NLGEOM" } else { "" });
+        if k == 0 {
+            write_supports(&mut out, scene, &mut notes);
+            write_loads(&mut out, scene);
+            out += &walls.step;
+        }
+        out += body;
+        let _ = writeln!(out, "*NODE PRINT, NSET=NALL\nU\n*END STEP");
+    }
     let mut text = String::new();
     for n in &notes {
         let _ = writeln!(text, "** not exported: {n}");
@@ -266,7 +267,7 @@ fn write_supports(out: &mut String, scene: &Scene, notes: &mut Vec<String>) {
     }
 }
 
-fn write_loads(out: &mut String, scene: &Scene, notes: &mut Vec<String>) {
+fn write_loads(out: &mut String, scene: &Scene) {
     let m = &scene.model;
     let end = scene.run.analysis.end_time;
     // Dead tractions become consistent nodal forces, summed per node.
@@ -278,14 +279,8 @@ fn write_loads(out: &mut String, scene: &Scene, notes: &mut Vec<String>) {
             ContributionDef::Load(l) => l,
             // Written by `contact::write_walls`.
             ContributionDef::Wall(_) => continue,
-            ContributionDef::Coupling(_) => {
-                notes.push("a coupling".into());
-                continue;
-            }
-            ContributionDef::Pairs(p) => {
-                notes.push(format!("small-sliding pairs `{}`", p.name));
-                continue;
-            }
+            // Written by `abaqus_pairs::write`.
+            ContributionDef::Coupling(_) | ContributionDef::Pairs(_) => continue,
         };
         match load {
             LoadDef::Nodal { set, force, curve } => {

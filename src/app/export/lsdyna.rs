@@ -9,14 +9,16 @@
 //!
 //! Where LS-DYNA has no field for an alfe choice (the element formulation, the contact
 //! method, the time integrator), the exporter writes it on an `$alfe key = value` line
-//! after the card: LS-DYNA reads a comment, `alfe import` the value. What has no
-//! equivalent at all (tractions, rotations, entities, pairs, couplings, ellipsoid and
-//! torus walls, turning walls) is listed in the header and returned.
+//! after the card: LS-DYNA reads a comment, `alfe import` the value. Small-sliding
+//! pairs, bolts, couplings and steps are written by [`super::lsdyna_pairs`]. What has no
+//! equivalent at all (tractions, rotations, entities, ellipsoid and torus walls, turning
+//! walls) is listed in the header and returned.
 
 // Index loops over xyz components read like the formulas.
 #![allow(clippy::needless_range_loop)]
 
 use super::abaqus::Exported;
+use super::lsdyna_cards::{card, r, Numbering};
 use crate::contact::motion::MotionKind;
 use crate::contact::wall::{ContactMethod, ShapeDef};
 use crate::curve::Curve;
@@ -29,18 +31,6 @@ use crate::scene::Scene;
 use crate::solve::analysis::AnalysisKind;
 use std::collections::BTreeMap;
 use std::fmt::Write;
-
-/// A long-format card: every field 20 columns.
-fn card(out: &mut String, fields: &[String]) {
-    for f in fields {
-        let _ = write!(out, "{f:>20}");
-    }
-    out.push('\n');
-}
-
-fn r(x: f64) -> String {
-    format!("{x:.12e}")
-}
 
 /// A unit enum's deck spelling (its serde name).
 fn deck_name<T: serde::Serialize>(t: &T) -> String {
@@ -100,6 +90,15 @@ impl Ids {
             card(&mut self.curve_text, &[r(*t), r(*v)]);
         }
         lcid
+    }
+}
+
+impl Numbering for Ids {
+    fn set(&mut self, name: &str, nodes: &[usize]) -> usize {
+        Ids::set(self, name, nodes)
+    }
+    fn curve(&mut self, c: &Curve) -> usize {
+        Ids::curve(self, c)
     }
 }
 
@@ -224,6 +223,13 @@ pub fn export_k(scene: &Scene) -> Exported {
     write_entities(&mut out, &mut model, scene, &mut ids, &mut notes);
     write_constraints(&mut model, scene, &mut ids, &mut notes);
     write_loads(&mut model, scene, &mut ids, &mut notes);
+    let surface_ids: BTreeMap<&str, usize> = m
+        .surfaces
+        .keys()
+        .enumerate()
+        .map(|(k, n)| (n.as_str(), k + 1))
+        .collect();
+    super::lsdyna_pairs::write(&mut model, scene, &surface_ids, &mut ids);
     write_walls(&mut model, scene, &mut ids, &mut notes);
     write_initial_velocity(&mut model, scene, &mut ids);
     write_controls(&mut model, scene);
@@ -382,9 +388,9 @@ fn write_loads(out: &mut String, scene: &Scene, ids: &mut Ids, notes: &mut Vec<S
             ContributionDef::Load(LoadDef::Traction { surface, .. }) => notes.push(format!(
                 "the traction on `{surface}` (LS-DYNA's segment loads are pressures)"
             )),
-            ContributionDef::Wall(_) => {}
-            ContributionDef::Coupling(_) => notes.push("a coupling".into()),
-            ContributionDef::Pairs(p) => notes.push(format!("small-sliding pairs `{}`", p.name)),
+            // Written by `lsdyna_pairs` and `write_walls`.
+            ContributionDef::Wall(_) | ContributionDef::Coupling(_) | ContributionDef::Pairs(_) => {
+            }
         }
     }
 }
@@ -533,15 +539,6 @@ fn write_walls(out: &mut String, scene: &Scene, ids: &mut Ids, notes: &mut Vec<S
     }
 }
 
-impl super::lsdyna_entities::Numbering for Ids {
-    fn curve(&mut self, c: &Curve) -> usize {
-        Ids::curve(self, c)
-    }
-    fn set(&mut self, name: &str, nodes: &[usize]) -> usize {
-        Ids::set(self, name, nodes)
-    }
-}
-
 /// Contact entities as rigid parts numbered after the model's parts and materials (see
 /// [`super::lsdyna_entities`]).
 fn write_entities(
@@ -608,6 +605,7 @@ fn write_controls(out: &mut String, scene: &Scene) {
     let a = &scene.run.analysis;
     out.push_str("*CONTROL_TERMINATION +\n");
     card(out, &[r(a.end_time)]);
+    super::lsdyna_pairs::write_steps(out, scene);
     if a.kind == AnalysisKind::Explicit {
         return;
     }

@@ -14,15 +14,9 @@
 use crate::contact::law::Threshold;
 use crate::contact::motion::MotionKind;
 use crate::contact::wall::{ContactMethod, ShapeDef};
-use crate::curve::Curve;
+use super::lsdyna_cards::{card, r, Numbering};
 use crate::model::walls::WallDef;
 use std::fmt::Write;
-
-/// Curve and node-set numbers, as the keyword file hands them out.
-pub trait Numbering {
-    fn curve(&mut self, c: &Curve) -> usize;
-    fn set(&mut self, name: &str, nodes: &[usize]) -> usize;
-}
 
 /// LS-DYNA's DOF codes of ux, uy, uz, rx, ry, rz.
 pub const DOF_CODES: [i64; 6] = [1, 2, 3, 5, 6, 7];
@@ -40,17 +34,6 @@ pub fn constraint_code(fixed: [bool; 3]) -> i64 {
         [true, false, true] => 6,
         [true, true, true] => 7,
     }
-}
-
-fn card(out: &mut String, fields: &[String]) {
-    for f in fields {
-        let _ = write!(out, "{f:>20}");
-    }
-    out.push('\n');
-}
-
-fn r(x: f64) -> String {
-    format!("{x:.12e}")
 }
 
 /// GEOTYP and G1…G3 of a shape; Err(why) for shapes `*CONTACT_ENTITY` has not.

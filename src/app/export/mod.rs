@@ -2,9 +2,12 @@
 //! runs in CalculiX (installed here) or reaches an Abaqus user.
 
 pub mod abaqus;
+pub mod abaqus_pairs;
 pub mod contact;
 pub mod lsdyna;
+mod lsdyna_cards;
 pub mod lsdyna_entities;
+pub mod lsdyna_pairs;
 pub mod rigid;
 
 use crate::{Error, Result};

@@ -120,10 +120,23 @@ pub fn import_k(path: &Path, deck_path: &Path, load: &Loader) -> Result<Imported
     for b in &bs {
         define(&mut m, b)?;
     }
-    for b in &bs {
-        model_keyword(&mut m, b)?;
+    let curve_names: BTreeMap<i64, String> =
+        m.curves.iter().map(|(k, c)| (*k, c.0.clone())).collect();
+    let extra = super::lsdyna_pairs::translate(
+        &bs,
+        &super::lsdyna_pairs::Ctx {
+            node_sets: &m.node_sets,
+            segment_sets: &m.segment_sets,
+            curves: &curve_names,
+        },
+    )?;
+    for (k, b) in bs.iter().enumerate() {
+        if !extra.handled.contains(&k) {
+            model_keyword(&mut m, b)?;
+        }
     }
     entities(&mut m)?;
+    merge(&mut m, extra);
     if m.solid_pids.is_empty() && m.shell_pids.is_empty() {
         return Err(format!(
             "{}: the file has no *ELEMENT_SOLID or *ELEMENT_SHELL",
@@ -137,6 +150,27 @@ pub fn import_k(path: &Path, deck_path: &Path, load: &Loader) -> Result<Imported
         crate::mesh::lsdyna::read_surface_k(path, load)?;
     }
     write_deck(&m, path, deck_path)
+}
+
+/// Pairs, bolts, couplings and steps (see [`super::lsdyna_pairs`]) into the model.
+fn merge(m: &mut Model, extra: super::lsdyna_pairs::Out) {
+    for (list, names) in [
+        (&mut m.used_sets, extra.sets),
+        (&mut m.used_surfaces, extra.surfaces),
+    ] {
+        for n in names {
+            if !list.contains(&n) {
+                list.push(n);
+            }
+        }
+    }
+    for c in extra.curves {
+        if !m.used_curves.contains(&c) {
+            m.used_curves.push(c);
+        }
+    }
+    m.tables.extend(extra.tables);
+    m.untranslated.extend(extra.untranslated);
 }
 
 /// Title, parts, sections, sets, curves, materials and element part numbers.
