@@ -276,6 +276,66 @@ fn same_walls(a: &Scene, b: &Scene) {
     }
 }
 
+/// Pairs (with their bolts' pretension) and couplings: the same entries, the same pairs in
+/// the same order (the order sums run in) with the same weights.
+fn same_pairs_and_couplings(name: &str, a: &Scene, b: &Scene) {
+    let pairs = |s: &Scene| -> Vec<alfe::model::pairs::PairsDef> {
+        s.model
+            .contributions
+            .iter()
+            .filter_map(|c| match c {
+                ContributionDef::Pairs(p) => Some(p.clone()),
+                _ => None,
+            })
+            .collect()
+    };
+    let (pa, pb) = (pairs(a), pairs(b));
+    assert_eq!(pa.len(), pb.len(), "{name}: pairs entries");
+    for (x, y) in pa.iter().zip(&pb) {
+        let n = &x.name;
+        assert_eq!((n, x.tied, x.method), (&y.name, y.tied, y.method), "{name}");
+        assert!(close(x.friction, y.friction), "{name}: {n}");
+        assert_eq!(x.unpaired, y.unpaired, "{name}: {n}");
+        assert_eq!(x.pairs.len(), y.pairs.len(), "{name}: {n}");
+        for (p, q) in x.pairs.iter().zip(&y.pairs) {
+            assert_eq!((p.node, &p.nodes), (q.node, &q.nodes), "{name}: {n}");
+            assert!(close(p.area, q.area), "{name}: {n} area");
+            for (u, v) in p.w.iter().zip(&q.w) {
+                assert!((u - v).abs() < 1e-12, "{name}: {n} weights");
+            }
+        }
+        match (&x.pretension, &y.pretension) {
+            (None, None) => {}
+            (Some(s), Some(t)) => {
+                assert!(
+                    close(s.force, t.force) && close(s.lock_at, t.lock_at),
+                    "{name}: {n}"
+                );
+                assert_eq!(s.curve, t.curve, "{name}: {n}");
+            }
+            _ => panic!("{name}: {n}: a bolt on one side only"),
+        }
+    }
+    let couplings = |s: &Scene| -> Vec<alfe::model::coupling::CouplingDef> {
+        s.model
+            .contributions
+            .iter()
+            .filter_map(|c| match c {
+                ContributionDef::Coupling(p) => Some(p.clone()),
+                _ => None,
+            })
+            .collect()
+    };
+    let (ca, cb) = (couplings(a), couplings(b));
+    assert_eq!(ca.len(), cb.len(), "{name}: couplings");
+    for (x, y) in ca.iter().zip(&cb) {
+        assert_eq!((&x.name, &x.nodes), (&y.name, &y.nodes), "{name}");
+        for (u, v) in x.weights.iter().zip(&y.weights) {
+            assert!(close(*u, *v), "{name}: {} weights", x.name);
+        }
+    }
+}
+
 /// The built-in scene and the model imported from its `.k` are the same model.
 fn same_model(name: &str, a: &Scene, b: &Scene) {
     let (ma, mb) = (&a.model, &b.model);
@@ -307,6 +367,7 @@ fn same_model(name: &str, a: &Scene, b: &Scene) {
     assert_eq!(prescribed(a), prescribed(b), "{name}: supports and motions");
     assert_eq!(velocities(a), velocities(b), "{name}: initial velocities");
     same_walls(a, b);
+    same_pairs_and_couplings(name, a, b);
     let (x, y) = (&a.run.analysis, &b.run.analysis);
     assert_eq!((x.kind, x.scheme), (y.kind, y.scheme), "{name}");
     for (p, q) in [
@@ -337,6 +398,7 @@ fn paper_examples_import_to_the_built_in_models() {
         "rubber-indent",
         "sphere-roll",
         "panel-dent",
+        "bolted-bracket",
         "b-pillar",
     ] {
         let k = dir.join(format!("{name}.k"));

@@ -5,7 +5,9 @@
 mod common;
 use common::*;
 
-/// bolt-bar (a tied pair and a bolt) with a frictional pair, a coupling and two steps.
+/// bolt-bar (`tests/bolt-bar.toml`: a tied pair and a bolt) with a coupling loaded in the
+/// second of two steps (the bolt's force in the first). The frictional pair is
+/// bolted-bracket's `joint`, checked entry by entry in `lsdyna_roundtrip.rs`.
 const DECK: &str = r#"
 [scene]
 name = "pairs-k"
@@ -31,6 +33,10 @@ mesh = { kind = "box", origin = [0, 0, 20], size = [4, 4, 20], cells = [3, 3, 5]
 name = "bottom"
 group = "zmin"
 part = "p1"
+[[node_sets]]
+name = "top"
+group = "zmax"
+part = "p3"
 [[surfaces]]
 name = "p1_top"
 group = "zmax"
@@ -47,13 +53,12 @@ part = "p2"
 name = "p3_bottom"
 group = "zmin"
 part = "p3"
-[[surfaces]]
-name = "p3_top"
-group = "zmax"
-part = "p3"
 [[boundary]]
 type = "fixed"
 set = "bottom"
+[[boundary]]
+type = "fixed"
+set = "top"
 [[curves]]
 name = "up"
 points = [[0, 0], [1, 1]]
@@ -73,12 +78,12 @@ tied = true
 name = "bolt1"
 tracked = "p3_bottom"
 reference = "p2_top"
-force = 50.0
+force = 1000.0
 step = "pre"
 [[couplings]]
 name = "head"
-nodes = "p3_top"
-force = { z = { value = 20.0, curve = "up", step = "pull" }, x = { value = 1.0, curve = "up", step = "pull" } }
+nodes = "p1_top"
+force = { z = { value = 400.0, curve = "up", step = "pull" }, x = { value = 10.0, curve = "up", step = "pull" } }
 [analysis]
 type = "static"
 step = 0.5
@@ -98,9 +103,9 @@ fn pairs_bolt_coupling_and_steps_round_trip_through_a_keyword_file() {
     for want in [
         "[[pairs]]\nname = \"glue\"",
         "tied = true",
-        "[[bolts]]\nname = \"bolt1\"\ntracked = \"p3_bottom\"\nreference = \"p2_top\"\nforce = 5e1",
+        "[[bolts]]\nname = \"bolt1\"\ntracked = \"p3_bottom\"\nreference = \"p2_top\"\nforce = 1e3",
         "lock_at = 1e0",
-        "[[couplings]]\nname = \"head\"\nnodes = \"p3_top\"",
+        "[[couplings]]\nname = \"head\"\nnodes = \"p1_top\"",
         "name = \"pre\"",
         "name = \"pull\"",
         "Every keyword was translated",

@@ -554,9 +554,11 @@ pub fn read_k(path: &Path, part: u32, pid: Option<i64>, load: &Loader) -> Result
         v.sort_unstable();
         v.dedup();
     }
+    // Faces keep the file's order (a surface's sums run in it: a model written by
+    // `alfe export` comes back bit for bit), each once.
     for v in mesh.face_groups.values_mut() {
-        v.sort_unstable();
-        v.dedup();
+        let mut seen = std::collections::BTreeSet::new();
+        v.retain(|f| seen.insert(*f));
     }
     Ok(mesh)
 }

@@ -75,6 +75,64 @@ impl Curves {
     }
 }
 
+/// A pair entry (tied, frictional small sliding) or a bolt (tied cut with a pre-tension
+/// section on a new node, loaded in step 1 and fixed at its lock).
+#[allow(clippy::too_many_arguments)]
+fn write_pair(
+    model: &mut String,
+    first: &mut String,
+    locks: &mut Vec<(f64, usize)>,
+    curves: &mut Curves,
+    m: &crate::model::def::ModelDef,
+    p: &crate::model::pairs::PairsDef,
+    next: &mut usize,
+    notes: &mut Vec<String>,
+) {
+    let surf = !m.node_sets.contains_key(&p.tracked) && m.surfaces.contains_key(&p.tracked);
+    if let Some(pre) = &p.pretension {
+        *next += 1;
+        let next = *next;
+        let amp = curves.name(&pre.curve);
+        let _ = writeln!(
+            model,
+            "** alfe bolts = {{ name = {}, tracked = {}, reference = {}, force = {:e}, curve = \"{amp}\", lock_at = {:e}{}{} }}",
+            q(&p.name), q(&p.tracked), q(&p.reference), pre.force, pre.lock_at,
+            opt("kappa", p.kappa), opt("search_distance", p.search_distance)
+        );
+        let _ = writeln!(
+            model,
+            "*NODE\n{next}, 0, 0, 0\n*TIE, NAME={}-CUT\n{}, {}\n*PRE-TENSION SECTION, SURFACE={}, NODE={next}",
+            p.name, p.tracked, p.reference, p.tracked
+        );
+        let _ = writeln!(first, "*CLOAD, AMPLITUDE={amp}\n{next}, 1, {:e}", pre.force);
+        locks.push((pre.lock_at, next));
+        return;
+    }
+    let _ = writeln!(model, "** alfe pairs = {}", pair_entry(p, surf));
+    if !surf {
+        notes.push(format!(
+            "pairs `{}`: a tracked node set (CalculiX pairs surfaces)",
+            p.name
+        ));
+    }
+    if p.tied {
+        let _ = writeln!(
+            model,
+            "*TIE, NAME={}\n{}, {}",
+            p.name, p.tracked, p.reference
+        );
+    } else {
+        // CalculiX's penalty: 10 E per unit length (a stiff contact).
+        let e = m.materials.iter().map(|x| young(&x.1)).fold(0.0, f64::max);
+        let k = 10.0 * e;
+        let _ = writeln!(
+            model,
+            "*SURFACE INTERACTION, NAME={n}-I\n*SURFACE BEHAVIOR, PRESSURE-OVERCLOSURE=LINEAR\n{k:.6e}\n*FRICTION\n{:e}, {:.6e}\n*CONTACT PAIR, INTERACTION={n}-I, TYPE=SURFACE TO SURFACE, SMALL SLIDING\n{}, {}",
+            p.friction.max(1e-6), 0.1 * k, p.tracked, p.reference, n = p.name
+        );
+    }
+}
+
 /// Pairs, bolts, couplings and steps of `scene` (the stages, or one step over the run).
 pub fn write(scene: &Scene, notes: &mut Vec<String>) -> Written {
     let m = &scene.model;
@@ -87,49 +145,16 @@ pub fn write(scene: &Scene, notes: &mut Vec<String>) -> Written {
     for c in &m.contributions {
         match c {
             ContributionDef::Pairs(p) => {
-                let surf =
-                    !m.node_sets.contains_key(&p.tracked) && m.surfaces.contains_key(&p.tracked);
-                if let Some(pre) = &p.pretension {
-                    next += 1;
-                    let amp = curves.name(&pre.curve);
-                    let _ = writeln!(
-                        model,
-                        "** alfe bolts = {{ name = {}, tracked = {}, reference = {}, force = {:e}, curve = \"{amp}\", lock_at = {:e}{}{} }}",
-                        q(&p.name), q(&p.tracked), q(&p.reference), pre.force, pre.lock_at,
-                        opt("kappa", p.kappa), opt("search_distance", p.search_distance)
-                    );
-                    let _ = writeln!(
-                        model,
-                        "*NODE\n{next}, 0, 0, 0\n*TIE, NAME={}-CUT\n{}, {}\n*PRE-TENSION SECTION, SURFACE={}, NODE={next}",
-                        p.name, p.tracked, p.reference, p.tracked
-                    );
-                    let _ = writeln!(first, "*CLOAD, AMPLITUDE={amp}\n{next}, 1, {:e}", pre.force);
-                    locks.push((pre.lock_at, next));
-                    continue;
-                }
-                let _ = writeln!(model, "** alfe pairs = {}", pair_entry(p, surf));
-                if !surf {
-                    notes.push(format!(
-                        "pairs `{}`: a tracked node set (CalculiX pairs surfaces)",
-                        p.name
-                    ));
-                }
-                if p.tied {
-                    let _ = writeln!(
-                        model,
-                        "*TIE, NAME={}\n{}, {}",
-                        p.name, p.tracked, p.reference
-                    );
-                } else {
-                    // CalculiX's penalty: 10 E per unit length (a stiff contact).
-                    let e = m.materials.iter().map(|x| young(&x.1)).fold(0.0, f64::max);
-                    let k = 10.0 * e;
-                    let _ = writeln!(
-                        model,
-                        "*SURFACE INTERACTION, NAME={n}-I\n*SURFACE BEHAVIOR, PRESSURE-OVERCLOSURE=LINEAR\n{k:.6e}\n*FRICTION\n{:e}, {:.6e}\n*CONTACT PAIR, INTERACTION={n}-I, TYPE=SURFACE TO SURFACE, SMALL SLIDING\n{}, {}",
-                        p.friction.max(1e-6), 0.1 * k, p.tracked, p.reference, n = p.name
-                    );
-                }
+                write_pair(
+                    &mut model,
+                    &mut first,
+                    &mut locks,
+                    &mut curves,
+                    m,
+                    p,
+                    &mut next,
+                    notes,
+                );
             }
             ContributionDef::Coupling(cp) => {
                 next += 1;

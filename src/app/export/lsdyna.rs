@@ -207,6 +207,7 @@ pub fn export_k(scene: &Scene) -> Exported {
     let mut out = String::new();
     let _ = writeln!(out, "*TITLE\n{}", scene.run.name);
     let _ = writeln!(out, "$alfe units = \"{}\"", deck_name(&scene.run.units));
+    write_record_notes(&mut out, scene);
     out.push_str("*NODE +\n");
     for (n, x) in mesh.coords.iter().enumerate() {
         card(&mut out, &[i(n + 1), r(x[0]), r(x[1]), r(x[2])]);
@@ -248,6 +249,22 @@ pub fn export_k(scene: &Scene) -> Exported {
     Exported {
         text,
         left_out: notes,
+    }
+}
+
+/// What the run reports (`[output]`, `[[quantities]]`) as `$alfe` notes in TOML: LS-DYNA's
+/// `*DATABASE` cards ask for other things.
+fn write_record_notes(out: &mut String, scene: &Scene) {
+    let Ok(deck) = scene.run.echo.parse::<toml::Table>() else {
+        return;
+    };
+    if let Some(o) = deck.get("output") {
+        let _ = writeln!(out, "$alfe output = {o}");
+    }
+    if let Some(toml::Value::Array(qs)) = deck.get("quantities") {
+        for q in qs {
+            let _ = writeln!(out, "$alfe quantity = {q}");
+        }
     }
 }
 

@@ -11,10 +11,10 @@
 //! G2). SSTYP 2: the tracked nodes are a node set. What LS-DYNA has no field for (the
 //! ALM settings, traced points, the name) rides on `$alfe` lines.
 
+use super::lsdyna_cards::{card, r, Numbering};
 use crate::contact::law::Threshold;
 use crate::contact::motion::MotionKind;
 use crate::contact::wall::{ContactMethod, ShapeDef};
-use super::lsdyna_cards::{card, r, Numbering};
 use crate::model::walls::WallDef;
 use std::fmt::Write;
 

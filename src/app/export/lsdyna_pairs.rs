@@ -16,16 +16,15 @@
 //! contact method, κ, tangential augmentation, friction threshold, search distance,
 //! node-to-face weights) is written on `$alfe` notes only when it is not the default.
 
+use super::lsdyna_cards::{card, r, Numbering};
 use crate::contact::law::{Threshold, DEFAULT_TANGENTIAL_AUGMENTATION};
 use crate::contact::wall::ContactMethod;
-use super::lsdyna_cards::{card, r, Numbering};
 use crate::model::coupling::{CouplingDef, Dof};
 use crate::model::def::ContributionDef;
 use crate::model::pairs::PairsDef;
 use crate::scene::Scene;
 use std::collections::BTreeMap;
 use std::fmt::Write;
-
 
 fn ints(out: &mut String, v: &[i64]) {
     for x in v {

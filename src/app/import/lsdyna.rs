@@ -24,92 +24,12 @@
 
 use super::abaqus::{relative, toml_str, Imported, XYZ};
 use super::keyword_blocks::{blocks, Block};
+use super::lsdyna_model::{Model, Section};
 use crate::mesh::abaqus::Loader;
 use crate::mesh::lsdyna::{int, read_lines_k, real, split};
 use std::collections::BTreeMap;
 use std::fmt::Write;
 use std::path::Path;
-
-/// A section: the formulation and hourglass coefficient (deck text) of a solid's, the
-/// thickness of a shell's.
-#[derive(Clone, Default)]
-struct Section {
-    formulation: Option<String>,
-    hourglass: Option<String>,
-    thickness: Option<f64>,
-}
-
-/// What the file's model keywords say, by LS-DYNA number.
-#[derive(Default)]
-struct Model {
-    title: String,
-    units: Option<String>,
-    /// mid → (name, TOML body, modulus for the unit label).
-    materials: BTreeMap<i64, (String, String, f64)>,
-    /// secid → its section.
-    sections: BTreeMap<i64, Section>,
-    /// (pid, name, secid, mid, where).
-    parts: Vec<(i64, String, i64, i64, String)>,
-    solid_pids: Vec<i64>,
-    shell_pids: Vec<i64>,
-    node_sets: BTreeMap<i64, String>,
-    segment_sets: BTreeMap<i64, String>,
-    /// lcid → (name, points).
-    curves: BTreeMap<i64, (String, Vec<[f64; 2]>)>,
-    used_sets: Vec<String>,
-    used_surfaces: Vec<String>,
-    used_curves: Vec<i64>,
-    /// TOML tables in order: boundary, loads, walls, initial velocities.
-    tables: Vec<String>,
-    /// (mid, lcid) of plasticity curves, resolved when written.
-    plastic_curves: Vec<(i64, i64)>,
-    end_time: Option<f64>,
-    /// (IMFLAG, DT0)
-    implicit: Option<(i64, f64)>,
-    /// (DTMIN, DTMAX)
-    auto: Option<(f64, f64)>,
-    /// (scheme, rho_inf)
-    dynamics: Option<(String, Option<String>)>,
-    /// (nonlinear, max iterations)
-    solver: Option<(String, i64)>,
-    entities: super::lsdyna_entities::Entities,
-    /// `[solver]` lines from `$alfe` notes.
-    solver_notes: Vec<String>,
-    untranslated: Vec<String>,
-}
-
-impl Model {
-    fn skip(&mut self, b: &Block, why: &str) {
-        self.untranslated
-            .push(format!("{}: *{}: {why}", b.at(), b.kw));
-    }
-    fn set(&mut self, sid: i64, b: &Block) -> Result<String, String> {
-        let name = self.node_sets.get(&sid).cloned().ok_or_else(|| {
-            format!(
-                "{}: *{} names node set {sid}, which the file does not define",
-                b.at(),
-                b.kw
-            )
-        })?;
-        if !self.used_sets.contains(&name) {
-            self.used_sets.push(name.clone());
-        }
-        Ok(name)
-    }
-    fn curve(&mut self, lcid: i64, b: &Block) -> Result<String, String> {
-        let name = self.curves.get(&lcid).map(|c| c.0.clone()).ok_or_else(|| {
-            format!(
-                "{}: *{} names curve {lcid}, which no *DEFINE_CURVE defines",
-                b.at(),
-                b.kw
-            )
-        })?;
-        if !self.used_curves.contains(&lcid) {
-            self.used_curves.push(lcid);
-        }
-        Ok(name)
-    }
-}
 
 /// Import `path` (an LS-DYNA keyword deck) into the deck at `deck_path`.
 pub fn import_k(path: &Path, deck_path: &Path, load: &Loader) -> Result<Imported, String> {
@@ -136,6 +56,11 @@ pub fn import_k(path: &Path, deck_path: &Path, load: &Loader) -> Result<Imported
         }
     }
     entities(&mut m)?;
+    for s in std::mem::take(&mut m.record_sets) {
+        if m.node_sets.values().any(|n| *n == s) && !m.used_sets.contains(&s) {
+            m.used_sets.push(s);
+        }
+    }
     merge(&mut m, extra);
     if m.solid_pids.is_empty() && m.shell_pids.is_empty() {
         return Err(format!(
@@ -188,6 +113,17 @@ fn define(m: &mut Model, b: &Block) -> Result<(), String> {
                 .map(|l| l.text.trim().to_string())
                 .unwrap_or_default();
             m.units = b.note("units").map(|u| u.trim_matches('"').to_string());
+            // What the run reports, as top-level keys (before any table header).
+            for (k, v) in &b.notes {
+                match k.as_str() {
+                    "output" => {
+                        m.record.push(format!("output = {v}"));
+                        m.record_sets = record_sets(v);
+                    }
+                    "quantity" => m.quantities.push(v.clone()),
+                    _ => {}
+                }
+            }
         }
         "PART" => {
             for pair in b.data.chunks(2) {
@@ -565,6 +501,19 @@ fn rigidwall(m: &mut Model, b: &Block) -> Result<(), String> {
     Ok(())
 }
 
+/// The node sets an `output = {…}` note names (reactions, displacements).
+fn record_sets(v: &str) -> Vec<String> {
+    let Ok(t) = format!("o = {v}").parse::<toml::Table>() else {
+        return Vec::new();
+    };
+    ["reactions", "displacements"]
+        .iter()
+        .filter_map(|k| t.get("o")?.get(k)?.as_array().cloned())
+        .flatten()
+        .filter_map(|x| x.as_str().map(str::to_string))
+        .collect()
+}
+
 /// The `[solver]` settings `alfe export` writes as notes.
 const SOLVER_NOTES: [&str; 6] = [
     "line_search",
@@ -671,6 +620,16 @@ fn write_deck(m: &Model, path: &Path, deck_path: &Path) -> Result<Imported, Stri
         let _ = writeln!(out, "# Numbers are the file's: units = \"{units}\" is a label chosen from E = {modulus:e} (check it).");
     }
     let mut body = String::new();
+    for l in &m.record {
+        let _ = writeln!(body, "\n{l}");
+    }
+    if !m.quantities.is_empty() {
+        let _ = writeln!(
+            body,
+            "\nquantities = [\n  {},\n]",
+            m.quantities.join(",\n  ")
+        );
+    }
     let _ = writeln!(
         body,
         "\n[scene]\nname = {}\nunits = \"{units}\"",

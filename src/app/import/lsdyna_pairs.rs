@@ -454,7 +454,7 @@ mod tests {
     #[test]
     fn cards_read_as_deck_entries() {
         let text = "*NODE
-     100     1.5     2.0    -3.0
+     100             1.5             2.0            -3.0
 *CONTACT_SURFACE_TO_SURFACE +
 $alfe name = \"joint\"
 $alfe method = \"penalty\"

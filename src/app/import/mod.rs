@@ -8,6 +8,7 @@ mod keyword_blocks;
 pub mod lsdyna;
 mod lsdyna_entities;
 mod lsdyna_materials;
+mod lsdyna_model;
 mod lsdyna_pairs;
 mod lsdyna_walls;
 
