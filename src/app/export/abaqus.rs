@@ -1,10 +1,12 @@
 //! A built scene as an Abaqus/CalculiX `.inp`: nodes, elements by part and type, node
-//! sets, surfaces (element faces S1…), materials, sections, one static step with its
-//! supports and loads at their end-of-step values (ramped over the step, Abaqus'
-//! default for static steps); rigid walls as rigid element layers in penalty contact
-//! (`contact.rs`). What has no equivalent in the file — entities with free DOFs, turning
-//! walls, small-sliding pairs, couplings, load curves other than a ramp, rotations,
-//! dynamics — is listed in the file's header and returned.
+//! sets, surfaces (element faces S1…), materials, sections, initial velocities, one step
+//! (`*STATIC` or `*DYNAMIC`, `abaqus_step.rs`) with its supports and loads at their
+//! end-of-step values (ramped over the step, Abaqus' default for static steps); rigid
+//! walls as rigid element layers in penalty contact (`contact.rs`). What the keywords
+//! cannot hold exactly for alfe goes to `** alfe` notes (`abaqus_notes.rs`); what has
+//! no equivalent for CalculiX — entities with free DOFs, turning walls, small-sliding
+//! pairs, couplings, load curves other than a ramp, rotations — is listed in the
+//! file's header and returned.
 
 // Index loops over xyz components read like the formulas.
 #![allow(clippy::needless_range_loop)]
@@ -16,7 +18,6 @@ use crate::mesh::{ElemKind, Mesh};
 use crate::model::def::{ContributionDef, MaterialDef, Motion};
 use crate::model::loads::LoadDef;
 use crate::scene::Scene;
-use crate::solve::analysis::AnalysisKind;
 use std::collections::BTreeMap;
 use std::fmt::Write;
 
@@ -150,14 +151,7 @@ pub fn export_inp(scene: &Scene) -> Exported {
     );
     let _ = writeln!(out, "*NODE, NSET=NALL");
     for (i, x) in mesh.coords.iter().enumerate() {
-        let _ = writeln!(
-            out,
-            "{}, {:.13e}, {:.13e}, {:.13e}",
-            i + 1,
-            x[0],
-            x[1],
-            x[2]
-        );
+        let _ = writeln!(out, "{}, {:e}, {:e}, {:e}", i + 1, x[0], x[1], x[2]);
     }
     // Elements by part and type, numbered 1.. in mesh order.
     let mut blocks: BTreeMap<(u32, &'static str), Vec<usize>> = BTreeMap::new();
@@ -212,17 +206,13 @@ pub fn export_inp(scene: &Scene) -> Exported {
     }
     let walls = super::contact::write_walls(scene, &mut notes);
     out += &walls.model;
-    let a = &scene.run.analysis;
-    if a.kind != AnalysisKind::Static {
-        notes.push("the analysis is dynamic: written as a static step".into());
-    }
+    out += &super::abaqus_step::initial_velocities(scene);
     let _ = writeln!(
         out,
-        "*STEP{}, INC=10000\n*STATIC\n{:.13e}, {:.13e}",
-        if finite { ", NLGEOM" } else { "" },
-        a.step,
-        a.end_time
+        "*STEP{}, INC=10000",
+        if finite { ", NLGEOM" } else { "" }
     );
+    out += &super::abaqus_step::procedure(scene, &mut notes);
     write_supports(&mut out, scene, &mut notes);
     write_loads(&mut out, scene, &mut notes);
     out += &walls.step;
@@ -231,6 +221,7 @@ pub fn export_inp(scene: &Scene) -> Exported {
     for n in &notes {
         let _ = writeln!(text, "** not exported: {n}");
     }
+    text += &super::abaqus_notes::notes(scene);
     text += &out;
     Exported {
         text,

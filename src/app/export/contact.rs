@@ -6,11 +6,13 @@
 //! hex8: −0.5 % at 1 mm; CalculiX's surface-to-surface gave +1.9 %). A
 //! penalty pair stands in for alfe's ALM: its penetration is p/K, with K = 50 E/h (h the
 //! slave faces' median edge), 2 % of a cell at p = E (CalculiX's guidance is 5–50 E/h).
-//! Walls that turn, entities with free DOFs and curves other than a ramp are left out.
+//! The wall's translation follows `*AMPLITUDE` curves sampled from its motion. Walls that
+//! turn and entities with free DOFs are left out (their notes still carry them).
 
 // Index loops over xyz components read like the formulas.
 #![allow(clippy::needless_range_loop)]
 
+use super::abaqus_notes::layer as bracket;
 use super::rigid::rigid_layer;
 use crate::mesh::abaqus::face_number;
 use crate::mesh::FaceRef;
@@ -60,15 +62,35 @@ fn exportable(w: &WallDef, end: f64) -> Result<(), String> {
     if w.body.is_some() {
         return Err("an entity with free DOFs (no CalculiX equivalent written)".into());
     }
-    if w.motion.rotation(end).iter().any(|r| *r != 0.0) {
+    if times(w, end)
+        .iter()
+        .any(|&t| w.motion.rotation(t).iter().any(|r| *r != 0.0))
+    {
         return Err("a turning wall (only translations are written)".into());
     }
-    for d in w.motion.dofs.iter().flatten() {
-        if d.kind == crate::contact::motion::MotionKind::Velocity || d.curve.points.len() > 2 {
-            return Err("a motion other than a linear ramp over the step".into());
-        }
-    }
     Ok(())
+}
+
+/// Times at which the wall's motion is sampled: its curves' points in the step, each
+/// interval cut in 8 (a velocity curve's displacement is piecewise quadratic).
+fn times(w: &WallDef, end: f64) -> Vec<f64> {
+    let mut ts = vec![0.0, end];
+    for d in w.motion.dofs.iter().flatten() {
+        ts.extend(
+            d.curve
+                .points
+                .iter()
+                .map(|p| p[0])
+                .filter(|&t| t > 0.0 && t < end),
+        );
+    }
+    ts.sort_by(f64::total_cmp);
+    ts.dedup();
+    let mut out = vec![0.0];
+    for p in ts.windows(2) {
+        out.extend((1..=8).map(|k| p[0] + (p[1] - p[0]) * k as f64 / 8.0));
+    }
+    out
 }
 
 /// Boundary faces all of whose nodes are tracked.
@@ -117,11 +139,11 @@ fn young(m: &MaterialDef) -> f64 {
     9.0 * k * g / (3.0 * k + g)
 }
 
-/// The box, in the wall's frame, that the tracked nodes sweep between t = 0 and the end
-/// (the wall translates), widened by 15 % of its diagonal and two facets.
+/// The box, in the wall's frame, that the tracked nodes sweep over the step (the wall
+/// translates; sampled at [`times`]), widened by 15 % of its diagonal and two facets.
 fn reach(m: &ModelDef, w: &WallDef, end: f64, h: f64) -> ([f64; 3], [f64; 3]) {
     let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
-    for t in [0.0, end] {
+    for t in times(w, end) {
         let pose = w.motion.pose(t);
         for &n in &w.nodes {
             let x = pose.to_local(m.mesh.coords[n]);
@@ -157,7 +179,8 @@ fn write_wall(
     let layer = rigid_layer(&w.shape, lo, hi, h);
     let pose = w.motion.pose(0.0);
     let n = name(&w.name);
-    let o = &mut out.model;
+    let mut model = String::new();
+    let o = &mut model;
     let _ = writeln!(
         o,
         "** rigid wall `{}`: {} facets",
@@ -189,9 +212,19 @@ fn write_wall(
         .fold(0.0, f64::max);
     let _ = writeln!(
         o,
-        "*MATERIAL, NAME=W_{n}_RIGID\n*ELASTIC\n{:.13e}, 0.3\n*SOLID SECTION, ELSET=W_{n}, MATERIAL=W_{n}_RIGID",
+        "*MATERIAL, NAME=W_{n}_RIGID\n*ELASTIC\n{:.13e}, 0.3",
         1e3 * e_slave
     );
+    // Dynamic steps need every material's density; the layer's motion is prescribed.
+    let rho = m
+        .materials
+        .iter()
+        .map(|x| x.1.build().density())
+        .fold(0.0, f64::max);
+    if rho > 0.0 {
+        let _ = writeln!(o, "*DENSITY\n{rho:e}");
+    }
+    let _ = writeln!(o, "*SOLID SECTION, ELSET=W_{n}, MATERIAL=W_{n}_RIGID");
     let _ = writeln!(o, "*SURFACE, NAME=W_{n}_MASTER, TYPE=ELEMENT\nW_{n}, S2");
     let _ = writeln!(o, "*SURFACE, NAME=W_{n}_SLAVE, TYPE=ELEMENT");
     for f in slave {
@@ -208,11 +241,33 @@ fn write_wall(
         // Stick slope: shear stress per slip length, a tenth of the normal stiffness.
         let _ = writeln!(o, "*FRICTION\n{}, {:.13e}", w.friction, 0.1 * k);
     }
-    let d = w.motion.displacement(end);
-    let s = &mut out.step;
-    let _ = writeln!(s, "*BOUNDARY");
+    let mut step = String::new();
+    let s = &mut step;
+    let ts = times(w, end);
     for c in 0..3 {
-        let _ = writeln!(s, "W_{n}_N, {}, {}, {:.13e}", c + 1, c + 1, d[c]);
+        let moves = ts.iter().any(|&t| w.motion.displacement(t)[c] != 0.0);
+        if !moves {
+            let _ = writeln!(s, "*BOUNDARY\nW_{n}_N, {}, {}", c + 1, c + 1);
+            continue;
+        }
+        // The translation component as an amplitude (in step time) of a unit value.
+        let _ = writeln!(o, "*AMPLITUDE, NAME=W_{n}_A{}", c + 1);
+        let pairs: Vec<String> = ts
+            .iter()
+            .map(|&t| format!("{t:e}, {:e}", w.motion.displacement(t)[c]))
+            .collect();
+        for chunk in pairs.chunks(4) {
+            let _ = writeln!(o, "{}", chunk.join(", "));
+        }
+        let _ = writeln!(
+            s,
+            "*BOUNDARY, AMPLITUDE=W_{n}_A{}\nW_{n}_N, {}, {}, 1.0",
+            c + 1,
+            c + 1,
+            c + 1
+        );
     }
     let _ = writeln!(s, "*NODE PRINT, NSET=W_{n}_N, TOTALS=ONLY\nRF");
+    out.model += &bracket(&model);
+    out.step += &bracket(&step);
 }

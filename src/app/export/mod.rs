@@ -2,6 +2,8 @@
 //! runs in CalculiX (installed here) or reaches an Abaqus user.
 
 pub mod abaqus;
+pub mod abaqus_notes;
+pub mod abaqus_step;
 pub mod contact;
 pub mod lsdyna;
 pub mod rigid;
