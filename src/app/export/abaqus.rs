@@ -11,6 +11,7 @@
 // Index loops over xyz components read like the formulas.
 #![allow(clippy::needless_range_loop)]
 
+use super::abaqus_step::num;
 use crate::fem::element::Formulation;
 use crate::fem::surface::traction_face;
 use crate::mesh::abaqus::{face_number, to_abaqus_order};
@@ -151,7 +152,14 @@ pub fn export_inp(scene: &Scene) -> Exported {
     );
     let _ = writeln!(out, "*NODE, NSET=NALL");
     for (i, x) in mesh.coords.iter().enumerate() {
-        let _ = writeln!(out, "{}, {:e}, {:e}, {:e}", i + 1, x[0], x[1], x[2]);
+        let _ = writeln!(
+            out,
+            "{}, {}, {}, {}",
+            i + 1,
+            num(x[0]),
+            num(x[1]),
+            num(x[2])
+        );
     }
     // Elements by part and type, numbered 1.. in mesh order.
     let mut blocks: BTreeMap<(u32, &'static str), Vec<usize>> = BTreeMap::new();

@@ -5,6 +5,21 @@
 //! `*DYNAMIC, EXPLICIT`; initial velocities as `*INITIAL CONDITIONS, TYPE=VELOCITY`.
 
 use crate::scene::Scene;
+
+/// A number for a data line: the shortest text that reads back as `x` (with or without
+/// an exponent) where it fits CalculiX's 20-character fields, else as many digits as fit.
+pub fn num(x: f64) -> String {
+    let (a, b) = (format!("{x}"), format!("{x:e}"));
+    let best = if a.len() <= b.len() { a } else { b.clone() };
+    if best.len() <= 20 {
+        return best;
+    }
+    (0..16)
+        .rev()
+        .map(|p| format!("{x:.p$e}"))
+        .find(|s| s.len() <= 20)
+        .unwrap_or(b)
+}
 use crate::solve::analysis::AnalysisKind;
 use std::fmt::Write;
 
@@ -12,7 +27,7 @@ use std::fmt::Write;
 pub fn procedure(scene: &Scene, notes: &mut Vec<String>) -> String {
     let a = &scene.run.analysis;
     match a.kind {
-        AnalysisKind::Static => format!("*STATIC\n{:e}, {:e}\n", a.step, a.end_time),
+        AnalysisKind::Static => format!("*STATIC\n{}, {}\n", num(a.step), num(a.end_time)),
         AnalysisKind::Implicit => {
             let alpha = ((a.rho_inf - 1.0) / (a.rho_inf + 1.0)).max(-1.0 / 3.0);
             if (alpha * (a.rho_inf + 1.0) - (a.rho_inf - 1.0)).abs() > 1e-12 {
@@ -22,11 +37,12 @@ pub fn procedure(scene: &Scene, notes: &mut Vec<String>) -> String {
                 ));
             }
             format!(
-                "*DYNAMIC, ALPHA={alpha:e}\n{:e}, {:e}, {:e}, {:e}\n",
-                a.step,
-                a.end_time,
-                a.min_step,
-                a.max_step.min(a.end_time)
+                "*DYNAMIC, ALPHA={}\n{}, {}, {}, {}\n",
+                num(alpha),
+                num(a.step),
+                num(a.end_time),
+                num(a.min_step),
+                num(a.max_step.min(a.end_time))
             )
         }
         AnalysisKind::Explicit => format!("*DYNAMIC, EXPLICIT\n{:e}, {:e}\n", a.step, a.end_time),
@@ -60,7 +76,7 @@ pub fn initial_velocities(scene: &Scene) -> String {
             None => set.clone(),
         };
         for (c, x) in v.iter().enumerate() {
-            let _ = writeln!(lines, "{name}, {}, {x:e}", c + 1);
+            let _ = writeln!(lines, "{name}, {}, {}", c + 1, num(*x));
         }
     }
     if !lines.is_empty() {

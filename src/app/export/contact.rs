@@ -13,6 +13,7 @@
 #![allow(clippy::needless_range_loop)]
 
 use super::abaqus_notes::layer as bracket;
+use super::abaqus_step::num;
 use super::rigid::rigid_layer;
 use crate::mesh::abaqus::face_number;
 use crate::mesh::FaceRef;
@@ -59,9 +60,6 @@ pub fn write_walls(scene: &Scene, notes: &mut Vec<String>) -> WallText {
 }
 
 fn exportable(w: &WallDef, end: f64) -> Result<(), String> {
-    if w.body.is_some() {
-        return Err("an entity with free DOFs (no CalculiX equivalent written)".into());
-    }
     if times(w, end)
         .iter()
         .any(|&t| w.motion.rotation(t).iter().any(|r| *r != 0.0))
@@ -155,6 +153,13 @@ fn reach(m: &ModelDef, w: &WallDef, end: f64, h: f64) -> ([f64; 3], [f64; 3]) {
     }
     let diag = (0..3).map(|k| (hi[k] - lo[k]).powi(2)).sum::<f64>().sqrt();
     let margin = 0.15 * diag + 2.0 * h;
+    // An entity free to turn may meet the nodes anywhere on its surface.
+    if w.body
+        .as_ref()
+        .is_some_and(|b| b.free[3..].iter().any(|&f| f))
+    {
+        return ([-1e30; 3], [1e30; 3]);
+    }
     (lo.map(|x| x - margin), hi.map(|x| x + margin))
 }
 
@@ -192,11 +197,11 @@ fn write_wall(
         let g = pose.to_global(*x);
         let _ = writeln!(
             o,
-            "{}, {:.13e}, {:.13e}, {:.13e}",
+            "{}, {}, {}, {}",
             *next_node + i + 1,
-            g[0],
-            g[1],
-            g[2]
+            num(g[0]),
+            num(g[1]),
+            num(g[2])
         );
     }
     let _ = writeln!(o, "*ELEMENT, TYPE=C3D8, ELSET=W_{n}");
@@ -206,6 +211,24 @@ fn write_wall(
     }
     *next_node += layer.nodes.len();
     *next_elem += layer.elems.len();
+    // An entity: the layer a CalculiX rigid body on a reference node (translations) and
+    // a rotation node, both at the entity's reference point.
+    let body = w.body.as_ref().map(|_| {
+        let (r, q) = (*next_node + 1, *next_node + 2);
+        let x = w.motion.pose(0.0).to_global([0.0; 3]);
+        for id in [r, q] {
+            let _ = writeln!(
+                o,
+                "*NODE, NSET=W_{n}_REF\n{id}, {}, {}, {}",
+                num(x[0]),
+                num(x[1]),
+                num(x[2])
+            );
+        }
+        let _ = writeln!(o, "*RIGID BODY, NSET=W_{n}_N, REF NODE={r}, ROT NODE={q}");
+        *next_node += 2;
+        (r, q)
+    });
     let e_slave = slave
         .iter()
         .map(|f| young(&m.materials[m.elem_material(f.elem)].1))
@@ -244,6 +267,13 @@ fn write_wall(
     let mut step = String::new();
     let s = &mut step;
     let ts = times(w, end);
+    if let (Some((r, q)), Some(b)) = (body, &w.body) {
+        write_body(o, s, &n, (r, q), b, w, &ts);
+        let _ = writeln!(s, "*NODE PRINT, NSET=W_{n}_REF, TOTALS=ONLY\nRF");
+        out.model += &bracket(&model);
+        out.step += &bracket(&step);
+        return;
+    }
     for c in 0..3 {
         let moves = ts.iter().any(|&t| w.motion.displacement(t)[c] != 0.0);
         if !moves {
@@ -251,14 +281,9 @@ fn write_wall(
             continue;
         }
         // The translation component as an amplitude (in step time) of a unit value.
-        let _ = writeln!(o, "*AMPLITUDE, NAME=W_{n}_A{}", c + 1);
-        let pairs: Vec<String> = ts
-            .iter()
-            .map(|&t| format!("{t:e}, {:e}", w.motion.displacement(t)[c]))
-            .collect();
-        for chunk in pairs.chunks(4) {
-            let _ = writeln!(o, "{}", chunk.join(", "));
-        }
+        amplitude(o, &format!("W_{n}_A{}", c + 1), &ts, |t| {
+            w.motion.displacement(t)[c]
+        });
         let _ = writeln!(
             s,
             "*BOUNDARY, AMPLITUDE=W_{n}_A{}\nW_{n}_N, {}, {}, 1.0",
@@ -270,4 +295,63 @@ fn write_wall(
     let _ = writeln!(s, "*NODE PRINT, NSET=W_{n}_N, TOTALS=ONLY\nRF");
     out.model += &bracket(&model);
     out.step += &bracket(&step);
+}
+
+/// An amplitude `name` of `f` sampled at `ts`.
+fn amplitude(o: &mut String, name: &str, ts: &[f64], f: impl Fn(f64) -> f64) {
+    let _ = writeln!(o, "*AMPLITUDE, NAME={name}");
+    let pairs: Vec<String> = ts
+        .iter()
+        .map(|&t| format!("{}, {}", num(t), num(f(t))))
+        .collect();
+    for chunk in pairs.chunks(4) {
+        let _ = writeln!(o, "{}", chunk.join(", "));
+    }
+}
+
+/// An entity's DOFs on its reference node `r` (translations) and rotation node `q`:
+/// prescribed ones by amplitudes, free ones left free, loads on free ones as `*CLOAD`
+/// (moments on the rotation node). Its mass, inertia and friction threshold have no
+/// keyword here: the notes carry them.
+fn write_body(
+    o: &mut String,
+    s: &mut String,
+    n: &str,
+    (r, q): (usize, usize),
+    b: &crate::model::body::BodyDef,
+    w: &WallDef,
+    ts: &[f64],
+) {
+    for c in 0..6 {
+        let (node, dof) = if c < 3 { (r, c + 1) } else { (q, c - 2) };
+        if b.free[c] {
+            if let Some((scale, curve)) = &b.loads[c] {
+                amplitude(o, &format!("W_{n}_L{}", c + 1), ts, |t| curve.eval(t));
+                let _ = writeln!(
+                    s,
+                    "*CLOAD, AMPLITUDE=W_{n}_L{}\n{node}, {dof}, {}",
+                    c + 1,
+                    num(*scale)
+                );
+            }
+            continue;
+        }
+        let value = |t: f64| {
+            if c < 3 {
+                w.motion.displacement(t)[c]
+            } else {
+                w.motion.rotation(t)[c - 3]
+            }
+        };
+        if ts.iter().all(|&t| value(t) == 0.0) {
+            let _ = writeln!(s, "*BOUNDARY\n{node}, {dof}, {dof}");
+            continue;
+        }
+        amplitude(o, &format!("W_{n}_A{}", c + 1), ts, value);
+        let _ = writeln!(
+            s,
+            "*BOUNDARY, AMPLITUDE=W_{n}_A{}\n{node}, {dof}, {dof}, 1.0",
+            c + 1
+        );
+    }
 }
