@@ -1,7 +1,7 @@
 //! Abaqus/CalculiX input files both ways with alfe's notes (issue 36): `alfe export`
 //! writes a scene as an `.inp` whose `** alfe` notes carry what the keywords cannot
 //! (walls, entities, formulations, analysis), `alfe import` rebuilds the deck from them
-//! and drops the rigid layers CalculiX needs. A wall scene (hertz-sphere) and a small
+//! and drops the rigid layers CalculiX needs. A wall scene (hertz-sphere, coarser) and a small
 //! contact-entity scene (sphere-roll, coarser and shorter) come back with the same walls
 //! and entities, field for field, and the same history.
 
@@ -64,7 +64,11 @@ fn same_history(name: &str, deck: &str, back: &std::path::Path, columns: &[&str]
 
 #[test]
 fn a_wall_scene_round_trips_through_an_inp_with_notes() {
-    let deck = builtin("hertz-sphere");
+    let deck = edit(
+        &builtin("hertz-sphere"),
+        "cells = [20, 20, 20]",
+        "cells = [8, 8, 8]",
+    );
     let (a, b, back) = round_trip("inp-hertz", &deck);
     let (wa, wb) = (walls(&a), walls(&b));
     assert!(!wa.is_empty());

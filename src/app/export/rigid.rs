@@ -3,9 +3,10 @@
 //! without analytical rigid surfaces (CalculiX) contact element faces; every node of the
 //! layer follows the wall's prescribed motion, so the layer is rigid and its material
 //! does not matter. Facets are about as wide as the slave faces' median edge h, and
-//! across a curved direction of radius R no wider than 2πR/128 (a chord then sags
-//! R(1 − cos(π/128)) ≈ 3e-4 R at most, h²/8R where the slave mesh is finer); a layer
-//! over [`MAX_FACETS`] is coarsened to that many.
+//! across a curved direction of radius R no wider than R/80: a sphere's chord then sags
+//! R/80²/8 ≈ 2e-5 R below the surface (2e-3 of Hertz's 1 mm indentation at R = 50).
+//! Along a straight direction (a cylinder's axis) they stay h wide, and a layer over
+//! [`MAX_FACETS`] is coarsened to that many, so files stay a few MB.
 
 // Index loops over xyz components read like the formulas.
 #![allow(clippy::needless_range_loop)]
@@ -30,11 +31,6 @@ struct Patch {
 
 /// At most this many facets per wall (so that exported files stay a few MB).
 pub const MAX_FACETS: usize = 20_000;
-
-/// A curved direction of radius `r`: facets at most 2πr/128 wide.
-fn curved(h: f64, r: f64) -> f64 {
-    h.min(TAU * r / 128.0)
-}
 
 fn cells(length: f64, h: f64) -> usize {
     ((length / h).ceil() as usize).clamp(1, 4000)
@@ -81,9 +77,12 @@ fn cube_sphere(r: [f64; 3], h: f64) -> Vec<Patch> {
     out
 }
 
-/// The surface patches of a shape, facets about `h` wide ([`curved`] across curved
-/// directions); an infinite plane is meshed over the box's footprint `lo..hi` only.
-fn patches(shape: &ShapeDef, h: f64, lo: [f64; 3], hi: [f64; 3]) -> Vec<Patch> {
+/// The surface patches of a shape, facets about `h` wide (r/80 at most across curved
+/// directions of radius r); an infinite plane is meshed over the box's footprint `lo..hi` only.
+fn patches(shape: &ShapeDef, h: f64, f: f64, lo: [f64; 3], hi: [f64; 3]) -> Vec<Patch> {
+    // Coarsened by `f` (over the cap): straight directions h f, curved min(h, r/80) f.
+    let curved = |r: f64| h.min(r / 80.0) * f;
+    let h = h * f;
     match *shape {
         ShapeDef::Plane { .. } => vec![rect(
             [lo[0], lo[1], 0.0],
@@ -116,13 +115,13 @@ fn patches(shape: &ShapeDef, h: f64, lo: [f64; 3], hi: [f64; 3]) -> Vec<Patch> {
             }
             out
         }
-        ShapeDef::Sphere { radius } => cube_sphere([radius; 3], curved(h, radius)),
+        ShapeDef::Sphere { radius } => cube_sphere([radius; 3], curved(radius)),
         ShapeDef::Ellipsoid { radii } => {
             let rmin = radii[0].min(radii[1]).min(radii[2]);
-            cube_sphere(radii, curved(h, rmin))
+            cube_sphere(radii, curved(rmin))
         }
         ShapeDef::Cylinder { radius, length } => {
-            let hc = curved(h, radius);
+            let hc = curved(radius);
             vec![Patch {
                 map: Box::new(move |u, v| {
                     let th = TAU * u;
@@ -139,8 +138,8 @@ fn patches(shape: &ShapeDef, h: f64, lo: [f64; 3], hi: [f64; 3]) -> Vec<Patch> {
                     let rho = radius + tube * ph.cos();
                     [rho * th.cos(), rho * th.sin(), tube * ph.sin()]
                 }),
-                nu: cells(TAU * (radius + tube), curved(h, radius + tube)),
-                nv: cells(TAU * tube, curved(h, tube)),
+                nu: cells(TAU * (radius + tube), curved(radius + tube)),
+                nv: cells(TAU * tube, curved(tube)),
             }]
         }
     }
@@ -150,20 +149,21 @@ fn patches(shape: &ShapeDef, h: f64, lo: [f64; 3], hi: [f64; 3]) -> Vec<Patch> {
 /// facets about `h` wide, h/2 deep; coarser where that would be over [`MAX_FACETS`].
 pub fn rigid_layer(shape: &ShapeDef, lo: [f64; 3], hi: [f64; 3], h: f64) -> RigidLayer {
     let projector = shape.build();
-    let mut h = h;
+    let mut f = 1.0;
     loop {
         let mut layer = RigidLayer {
             nodes: Vec::new(),
             elems: Vec::new(),
         };
-        for p in &patches(shape, h, lo, hi) {
+        for p in &patches(shape, h, f, lo, hi) {
             add_patch(&mut layer, p, projector.as_ref(), lo, hi, 0.5 * h);
         }
-        if layer.elems.len() <= MAX_FACETS {
+        // A layer already one facet a patch cannot be coarsened further.
+        if layer.elems.len() <= MAX_FACETS || f > 1e6 {
             return layer;
         }
-        // Facets scale as 1/h² on a surface; a little more so that it lands under.
-        h *= 1.05 * (layer.elems.len() as f64 / MAX_FACETS as f64).sqrt();
+        // Facets scale as 1/f² on a surface; a little more so that it lands under.
+        f *= 1.05 * (layer.elems.len() as f64 / MAX_FACETS as f64).sqrt();
     }
 }
 
