@@ -488,6 +488,7 @@ fn a_rigid_wall_exports_as_a_rigid_layer_in_contact() {
         "{slave:?}"
     );
     assert!(text.contains("*CONTACT PAIR, INTERACTION=W_sphere_I, TYPE=NODE TO SURFACE\nW_sphere_SLAVE, W_sphere_MASTER"));
-    assert!(text.contains("W_sphere_N, 3, 3, -1.0000000000000e0"));
+    assert!(text.contains("*BOUNDARY, AMPLITUDE=W_sphere_A3\nW_sphere_N, 3, 3, 1.0"));
+    assert!(text.contains("*AMPLITUDE, NAME=W_sphere_A3\n0, -0, 0.125, -0.125"));
     assert!(text.contains("*NODE PRINT, NSET=W_sphere_N, TOTALS=ONLY\nRF"));
 }

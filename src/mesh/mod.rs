@@ -13,6 +13,7 @@ pub mod patches;
 pub mod quadratic;
 pub mod select;
 pub mod sheet;
+pub mod subset;
 
 use nalgebra::Vector3;
 use std::collections::BTreeMap;

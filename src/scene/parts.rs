@@ -178,11 +178,11 @@ fn part_mesh(m: &MeshDeck, f: &str, part: u32, deck_dir: &Path) -> Result<Mesh> 
         MeshDeck::Blocks { .. } => blocks_part(m, f, part),
         MeshDeck::Sheet { .. } => sheet_part(m, f, part, deck_dir),
         MeshDeck::Gmsh { file } => gmsh_part(file, f, part, deck_dir),
-        MeshDeck::Abaqus { file } => abaqus_part(file, f, part, deck_dir),
+        MeshDeck::Abaqus { file, elset } => abaqus_part(file, elset.as_deref(), f, part, deck_dir),
         MeshDeck::LsDyna { file, pid } => lsdyna_part(file, *pid, f, part, deck_dir),
         MeshDeck::File { file } => match extension(file).as_deref() {
             Some("msh") => gmsh_part(file, f, part, deck_dir),
-            Some("inp") => abaqus_part(file, f, part, deck_dir),
+            Some("inp") => abaqus_part(file, None, f, part, deck_dir),
             Some("k" | "key" | "dyn") => lsdyna_part(file, None, f, part, deck_dir),
             _ => Err(err(
                 format!("{f}.mesh.file"),
@@ -546,10 +546,20 @@ fn sheet_part(m: &MeshDeck, f: &str, part: u32, deck_dir: &Path) -> Result<Mesh>
 
 /// An Abaqus/CalculiX `.inp` part mesh (see [`part_mesh`]); its includes are read
 /// relative to the including file.
-fn abaqus_part(file: &str, f: &str, part: u32, deck_dir: &Path) -> Result<Mesh> {
+fn abaqus_part(
+    file: &str,
+    elset: Option<&str>,
+    f: &str,
+    part: u32,
+    deck_dir: &Path,
+) -> Result<Mesh> {
     let path = deck_dir.join(file);
     let mut mesh = crate::mesh::abaqus::read_inp(&path, part, &read_text)
         .map_err(|e| err(format!("{f}.mesh.file"), e))?;
+    if let Some(name) = elset {
+        crate::mesh::subset::keep_elem_group(&mut mesh, name)
+            .map_err(|e| err(format!("{f}.mesh.elset"), format!("`{file}`: {e}")))?;
+    }
     compact_unused_nodes(&mut mesh);
     Ok(mesh)
 }

@@ -1,14 +1,17 @@
 //! A built scene as an Abaqus/CalculiX `.inp`: nodes, elements by part and type, node
-//! sets, surfaces (element faces S1…), materials, sections, one static step with its
-//! supports and loads at their end-of-step values (ramped over the step, Abaqus'
-//! default for static steps); rigid walls as rigid element layers in penalty contact
-//! (`contact.rs`). What has no equivalent in the file — entities with free DOFs, turning
-//! walls, small-sliding pairs, couplings, load curves other than a ramp, rotations,
-//! dynamics — is listed in the file's header and returned.
+//! sets, surfaces (element faces S1…), materials, sections, initial velocities, one step
+//! (`*STATIC` or `*DYNAMIC`, `abaqus_step.rs`) with its supports and loads at their
+//! end-of-step values (ramped over the step, Abaqus' default for static steps); rigid
+//! walls as rigid element layers in penalty contact (`contact.rs`). What the keywords
+//! cannot hold exactly for alfe goes to `** alfe` notes (`abaqus_notes.rs`); what has
+//! no equivalent for CalculiX — entities with free DOFs, turning walls, small-sliding
+//! pairs, couplings, load curves other than a ramp, rotations — is listed in the
+//! file's header and returned.
 
 // Index loops over xyz components read like the formulas.
 #![allow(clippy::needless_range_loop)]
 
+use super::abaqus_step::num;
 use crate::fem::element::Formulation;
 use crate::fem::surface::traction_face;
 use crate::mesh::abaqus::{face_number, to_abaqus_order};
@@ -16,7 +19,6 @@ use crate::mesh::{ElemKind, Mesh};
 use crate::model::def::{ContributionDef, MaterialDef, Motion};
 use crate::model::loads::LoadDef;
 use crate::scene::Scene;
-use crate::solve::analysis::AnalysisKind;
 use std::collections::BTreeMap;
 use std::fmt::Write;
 
@@ -152,11 +154,11 @@ pub fn export_inp(scene: &Scene) -> Exported {
     for (i, x) in mesh.coords.iter().enumerate() {
         let _ = writeln!(
             out,
-            "{}, {:.13e}, {:.13e}, {:.13e}",
+            "{}, {}, {}, {}",
             i + 1,
-            x[0],
-            x[1],
-            x[2]
+            num(x[0]),
+            num(x[1]),
+            num(x[2])
         );
     }
     // Elements by part and type, numbered 1.. in mesh order.
@@ -212,29 +214,44 @@ pub fn export_inp(scene: &Scene) -> Exported {
     }
     let walls = super::contact::write_walls(scene, &mut notes);
     out += &walls.model;
-    let a = &scene.run.analysis;
-    if a.kind != AnalysisKind::Static {
-        notes.push("the analysis is dynamic: written as a static step".into());
-    }
+    out += &super::abaqus_step::initial_velocities(scene);
     let extra = super::abaqus_pairs::write(scene, &mut notes);
-    out += &extra.model;
+    // CalculiX's stand-ins for pairs, bolts and couplings: the notes hold them exactly.
+    out += &super::abaqus_notes::layer(&extra.model);
+    // One step: the analysis' own procedure (static or dynamic); several: static stages.
+    let single = scene.run.analysis.stages.is_empty();
     for (k, (head, body)) in extra.steps.iter().enumerate() {
+        let head = if single {
+            let p = super::abaqus_step::procedure(scene, &mut notes);
+            format!(
+                "*STEP{{NLGEOM}}, INC=10000
+{p}"
+            )
+        } else {
+            head.clone()
+        };
         out += &head.replace("{NLGEOM}", if finite { ", NLGEOM" } else { "" });
         if k == 0 {
             write_supports(&mut out, scene, &mut notes);
             write_loads(&mut out, scene);
             out += &walls.step;
         }
-        out += body;
-        let _ = writeln!(out, "*NODE PRINT, NSET=NALL\nU\n*END STEP");
+        out += &super::abaqus_notes::layer(body);
+        let _ = writeln!(
+            out,
+            "*NODE PRINT, NSET=NALL
+U
+*END STEP"
+        );
     }
     let mut text = String::new();
     for n in &notes {
         let _ = writeln!(text, "** not exported: {n}");
     }
+    text += &super::abaqus_notes::notes(scene);
     text += &out;
     Exported {
-        text,
+        text: super::abaqus_notes::signed(text),
         left_out: notes,
     }
 }

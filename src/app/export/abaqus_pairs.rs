@@ -95,7 +95,7 @@ fn write_pair(
         let amp = curves.name(&pre.curve);
         let _ = writeln!(
             model,
-            "** alfe bolts = {{ name = {}, tracked = {}, reference = {}, force = {:e}, curve = \"{amp}\", lock_at = {:e}{}{} }}",
+            "** alfe-entry bolts = {{ name = {}, tracked = {}, reference = {}, force = {:e}, curve = \"{amp}\", lock_at = {:e}{}{} }}",
             q(&p.name), q(&p.tracked), q(&p.reference), pre.force, pre.lock_at,
             opt("kappa", p.kappa), opt("search_distance", p.search_distance)
         );
@@ -108,7 +108,7 @@ fn write_pair(
         locks.push((pre.lock_at, next));
         return;
     }
-    let _ = writeln!(model, "** alfe pairs = {}", pair_entry(p, surf));
+    let _ = writeln!(model, "** alfe-entry pairs = {}", pair_entry(p, surf));
     if !surf {
         notes.push(format!(
             "pairs `{}`: a tracked node set (CalculiX pairs surfaces)",
@@ -212,7 +212,7 @@ pub fn write(scene: &Scene, notes: &mut Vec<String>) -> Written {
         if !a.stages.is_empty() {
             let _ = writeln!(
                 head,
-                "** alfe steps = {{ name = {}, duration = {dur:e}, step = {step:e}, min_step = {min:e}, max_step = {max:e}, output_every = {every} }}",
+                "** alfe-entry steps = {{ name = {}, duration = {dur:e}, step = {step:e}, min_step = {min:e}, max_step = {max:e}, output_every = {every} }}",
                 q(name)
             );
         }
@@ -298,7 +298,7 @@ fn write_coupling(
     // Dotted keys inside an inline table are TOML 1.0.
     let _ = writeln!(
         model,
-        "** alfe couplings = {{ name = {}, nodes = {}, weights = \"{}\", point = [{:e}, {:e}, {:e}]{comps} }}",
+        "** alfe-entry couplings = {{ name = {}, nodes = {}, weights = \"{}\", point = [{:e}, {:e}, {:e}]{comps} }}",
         q(&c.name),
         q(&c.set),
         if uniform { "uniform" } else { "area" },

@@ -6,11 +6,14 @@
 //! hex8: −0.5 % at 1 mm; CalculiX's surface-to-surface gave +1.9 %). A
 //! penalty pair stands in for alfe's ALM: its penetration is p/K, with K = 50 E/h (h the
 //! slave faces' median edge), 2 % of a cell at p = E (CalculiX's guidance is 5–50 E/h).
-//! Walls that turn, entities with free DOFs and curves other than a ramp are left out.
+//! The wall's translation follows `*AMPLITUDE` curves sampled from its motion. Walls that
+//! turn and entities with free DOFs are left out (their notes still carry them).
 
 // Index loops over xyz components read like the formulas.
 #![allow(clippy::needless_range_loop)]
 
+use super::abaqus_notes::layer as bracket;
+use super::abaqus_step::num;
 use super::rigid::rigid_layer;
 use crate::mesh::abaqus::face_number;
 use crate::mesh::FaceRef;
@@ -57,18 +60,35 @@ pub fn write_walls(scene: &Scene, notes: &mut Vec<String>) -> WallText {
 }
 
 fn exportable(w: &WallDef, end: f64) -> Result<(), String> {
-    if w.body.is_some() {
-        return Err("an entity with free DOFs (no CalculiX equivalent written)".into());
-    }
-    if w.motion.rotation(end).iter().any(|r| *r != 0.0) {
+    if times(w, end)
+        .iter()
+        .any(|&t| w.motion.rotation(t).iter().any(|r| *r != 0.0))
+    {
         return Err("a turning wall (only translations are written)".into());
     }
-    for d in w.motion.dofs.iter().flatten() {
-        if d.kind == crate::contact::motion::MotionKind::Velocity || d.curve.points.len() > 2 {
-            return Err("a motion other than a linear ramp over the step".into());
-        }
-    }
     Ok(())
+}
+
+/// Times at which the wall's motion is sampled: its curves' points in the step, each
+/// interval cut in 8 (a velocity curve's displacement is piecewise quadratic).
+fn times(w: &WallDef, end: f64) -> Vec<f64> {
+    let mut ts = vec![0.0, end];
+    for d in w.motion.dofs.iter().flatten() {
+        ts.extend(
+            d.curve
+                .points
+                .iter()
+                .map(|p| p[0])
+                .filter(|&t| t > 0.0 && t < end),
+        );
+    }
+    ts.sort_by(f64::total_cmp);
+    ts.dedup();
+    let mut out = vec![0.0];
+    for p in ts.windows(2) {
+        out.extend((1..=8).map(|k| p[0] + (p[1] - p[0]) * k as f64 / 8.0));
+    }
+    out
 }
 
 /// Boundary faces all of whose nodes are tracked.
@@ -117,11 +137,11 @@ fn young(m: &MaterialDef) -> f64 {
     9.0 * k * g / (3.0 * k + g)
 }
 
-/// The box, in the wall's frame, that the tracked nodes sweep between t = 0 and the end
-/// (the wall translates), widened by 15 % of its diagonal and two facets.
+/// The box, in the wall's frame, that the tracked nodes sweep over the step (the wall
+/// translates; sampled at [`times`]), widened by 15 % of its diagonal and two facets.
 fn reach(m: &ModelDef, w: &WallDef, end: f64, h: f64) -> ([f64; 3], [f64; 3]) {
     let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
-    for t in [0.0, end] {
+    for t in times(w, end) {
         let pose = w.motion.pose(t);
         for &n in &w.nodes {
             let x = pose.to_local(m.mesh.coords[n]);
@@ -133,6 +153,13 @@ fn reach(m: &ModelDef, w: &WallDef, end: f64, h: f64) -> ([f64; 3], [f64; 3]) {
     }
     let diag = (0..3).map(|k| (hi[k] - lo[k]).powi(2)).sum::<f64>().sqrt();
     let margin = 0.15 * diag + 2.0 * h;
+    // An entity free to turn may meet the nodes anywhere on its surface.
+    if w.body
+        .as_ref()
+        .is_some_and(|b| b.free[3..].iter().any(|&f| f))
+    {
+        return ([-1e30; 3], [1e30; 3]);
+    }
     (lo.map(|x| x - margin), hi.map(|x| x + margin))
 }
 
@@ -157,7 +184,8 @@ fn write_wall(
     let layer = rigid_layer(&w.shape, lo, hi, h);
     let pose = w.motion.pose(0.0);
     let n = name(&w.name);
-    let o = &mut out.model;
+    let mut model = String::new();
+    let o = &mut model;
     let _ = writeln!(
         o,
         "** rigid wall `{}`: {} facets",
@@ -169,11 +197,11 @@ fn write_wall(
         let g = pose.to_global(*x);
         let _ = writeln!(
             o,
-            "{}, {:.13e}, {:.13e}, {:.13e}",
+            "{}, {}, {}, {}",
             *next_node + i + 1,
-            g[0],
-            g[1],
-            g[2]
+            num(g[0]),
+            num(g[1]),
+            num(g[2])
         );
     }
     let _ = writeln!(o, "*ELEMENT, TYPE=C3D8, ELSET=W_{n}");
@@ -183,15 +211,43 @@ fn write_wall(
     }
     *next_node += layer.nodes.len();
     *next_elem += layer.elems.len();
+    // An entity: the layer a CalculiX rigid body on a reference node (translations) and
+    // a rotation node, both at the entity's reference point.
+    let body = w.body.as_ref().map(|_| {
+        let (r, q) = (*next_node + 1, *next_node + 2);
+        let x = w.motion.pose(0.0).to_global([0.0; 3]);
+        for id in [r, q] {
+            let _ = writeln!(
+                o,
+                "*NODE, NSET=W_{n}_REF\n{id}, {}, {}, {}",
+                num(x[0]),
+                num(x[1]),
+                num(x[2])
+            );
+        }
+        let _ = writeln!(o, "*RIGID BODY, NSET=W_{n}_N, REF NODE={r}, ROT NODE={q}");
+        *next_node += 2;
+        (r, q)
+    });
     let e_slave = slave
         .iter()
         .map(|f| young(&m.materials[m.elem_material(f.elem)].1))
         .fold(0.0, f64::max);
     let _ = writeln!(
         o,
-        "*MATERIAL, NAME=W_{n}_RIGID\n*ELASTIC\n{:.13e}, 0.3\n*SOLID SECTION, ELSET=W_{n}, MATERIAL=W_{n}_RIGID",
+        "*MATERIAL, NAME=W_{n}_RIGID\n*ELASTIC\n{:.13e}, 0.3",
         1e3 * e_slave
     );
+    // Dynamic steps need every material's density; the layer's motion is prescribed.
+    let rho = m
+        .materials
+        .iter()
+        .map(|x| x.1.build().density())
+        .fold(0.0, f64::max);
+    if rho > 0.0 {
+        let _ = writeln!(o, "*DENSITY\n{rho:e}");
+    }
+    let _ = writeln!(o, "*SOLID SECTION, ELSET=W_{n}, MATERIAL=W_{n}_RIGID");
     let _ = writeln!(o, "*SURFACE, NAME=W_{n}_MASTER, TYPE=ELEMENT\nW_{n}, S2");
     let _ = writeln!(o, "*SURFACE, NAME=W_{n}_SLAVE, TYPE=ELEMENT");
     for f in slave {
@@ -208,11 +264,94 @@ fn write_wall(
         // Stick slope: shear stress per slip length, a tenth of the normal stiffness.
         let _ = writeln!(o, "*FRICTION\n{}, {:.13e}", w.friction, 0.1 * k);
     }
-    let d = w.motion.displacement(end);
-    let s = &mut out.step;
-    let _ = writeln!(s, "*BOUNDARY");
+    let mut step = String::new();
+    let s = &mut step;
+    let ts = times(w, end);
+    if let (Some((r, q)), Some(b)) = (body, &w.body) {
+        write_body(o, s, &n, (r, q), b, w, &ts);
+        let _ = writeln!(s, "*NODE PRINT, NSET=W_{n}_REF, TOTALS=ONLY\nRF");
+        out.model += &bracket(&model);
+        out.step += &bracket(&step);
+        return;
+    }
     for c in 0..3 {
-        let _ = writeln!(s, "W_{n}_N, {}, {}, {:.13e}", c + 1, c + 1, d[c]);
+        let moves = ts.iter().any(|&t| w.motion.displacement(t)[c] != 0.0);
+        if !moves {
+            let _ = writeln!(s, "*BOUNDARY\nW_{n}_N, {}, {}", c + 1, c + 1);
+            continue;
+        }
+        // The translation component as an amplitude (in step time) of a unit value.
+        amplitude(o, &format!("W_{n}_A{}", c + 1), &ts, |t| {
+            w.motion.displacement(t)[c]
+        });
+        let _ = writeln!(
+            s,
+            "*BOUNDARY, AMPLITUDE=W_{n}_A{}\nW_{n}_N, {}, {}, 1.0",
+            c + 1,
+            c + 1,
+            c + 1
+        );
     }
     let _ = writeln!(s, "*NODE PRINT, NSET=W_{n}_N, TOTALS=ONLY\nRF");
+    out.model += &bracket(&model);
+    out.step += &bracket(&step);
+}
+
+/// An amplitude `name` of `f` sampled at `ts`.
+fn amplitude(o: &mut String, name: &str, ts: &[f64], f: impl Fn(f64) -> f64) {
+    let _ = writeln!(o, "*AMPLITUDE, NAME={name}");
+    let pairs: Vec<String> = ts
+        .iter()
+        .map(|&t| format!("{}, {}", num(t), num(f(t))))
+        .collect();
+    for chunk in pairs.chunks(4) {
+        let _ = writeln!(o, "{}", chunk.join(", "));
+    }
+}
+
+/// An entity's DOFs on its reference node `r` (translations) and rotation node `q`:
+/// prescribed ones by amplitudes, free ones left free, loads on free ones as `*CLOAD`
+/// (moments on the rotation node). Its mass, inertia and friction threshold have no
+/// keyword here: the notes carry them.
+fn write_body(
+    o: &mut String,
+    s: &mut String,
+    n: &str,
+    (r, q): (usize, usize),
+    b: &crate::model::body::BodyDef,
+    w: &WallDef,
+    ts: &[f64],
+) {
+    for c in 0..6 {
+        let (node, dof) = if c < 3 { (r, c + 1) } else { (q, c - 2) };
+        if b.free[c] {
+            if let Some((scale, curve)) = &b.loads[c] {
+                amplitude(o, &format!("W_{n}_L{}", c + 1), ts, |t| curve.eval(t));
+                let _ = writeln!(
+                    s,
+                    "*CLOAD, AMPLITUDE=W_{n}_L{}\n{node}, {dof}, {}",
+                    c + 1,
+                    num(*scale)
+                );
+            }
+            continue;
+        }
+        let value = |t: f64| {
+            if c < 3 {
+                w.motion.displacement(t)[c]
+            } else {
+                w.motion.rotation(t)[c - 3]
+            }
+        };
+        if ts.iter().all(|&t| value(t) == 0.0) {
+            let _ = writeln!(s, "*BOUNDARY\n{node}, {dof}, {dof}");
+            continue;
+        }
+        amplitude(o, &format!("W_{n}_A{}", c + 1), ts, value);
+        let _ = writeln!(
+            s,
+            "*BOUNDARY, AMPLITUDE=W_{n}_A{}\n{node}, {dof}, {dof}, 1.0",
+            c + 1
+        );
+    }
 }

@@ -2,7 +2,9 @@
 //! runs in CalculiX (installed here) or reaches an Abaqus user.
 
 pub mod abaqus;
+pub mod abaqus_notes;
 pub mod abaqus_pairs;
+pub mod abaqus_step;
 pub mod contact;
 pub mod lsdyna;
 mod lsdyna_cards;

@@ -2,8 +2,11 @@
 //! nodes it tracks, faceted into quads and extruded inward by one layer of hex8. Codes
 //! without analytical rigid surfaces (CalculiX) contact element faces; every node of the
 //! layer follows the wall's prescribed motion, so the layer is rigid and its material
-//! does not matter. Facets on curved shapes are at most R/80 wide: a sphere's chord then
-//! sags R/80²/8 ≈ 2e-5 R below the surface (2e-3 of Hertz's 1 mm indentation at R = 50).
+//! does not matter. Facets are about as wide as the slave faces' median edge h, and
+//! across a curved direction of radius R no wider than R/80: a sphere's chord then sags
+//! R/80²/8 ≈ 2e-5 R below the surface (2e-3 of Hertz's 1 mm indentation at R = 50).
+//! Along a straight direction (a cylinder's axis) they stay h wide, and a layer over
+//! [`MAX_FACETS`] is coarsened to that many, so files stay a few MB.
 
 // Index loops over xyz components read like the formulas.
 #![allow(clippy::needless_range_loop)]
@@ -25,6 +28,9 @@ struct Patch {
     nu: usize,
     nv: usize,
 }
+
+/// At most this many facets per wall (so that exported files stay a few MB).
+pub const MAX_FACETS: usize = 20_000;
 
 fn cells(length: f64, h: f64) -> usize {
     ((length / h).ceil() as usize).clamp(1, 4000)
@@ -71,9 +77,12 @@ fn cube_sphere(r: [f64; 3], h: f64) -> Vec<Patch> {
     out
 }
 
-/// The surface patches of a shape, facets about `h` wide (R/80 at most on curved
-/// shapes); an infinite plane is meshed over the box's footprint `lo..hi` only.
-fn patches(shape: &ShapeDef, h: f64, lo: [f64; 3], hi: [f64; 3]) -> Vec<Patch> {
+/// The surface patches of a shape, facets about `h` wide (r/80 at most across curved
+/// directions of radius r); an infinite plane is meshed over the box's footprint `lo..hi` only.
+fn patches(shape: &ShapeDef, h: f64, f: f64, lo: [f64; 3], hi: [f64; 3]) -> Vec<Patch> {
+    // Coarsened by `f` (over the cap): straight directions h f, curved min(h, r/80) f.
+    let curved = |r: f64| h.min(r / 80.0) * f;
+    let h = h * f;
     match *shape {
         ShapeDef::Plane { .. } => vec![rect(
             [lo[0], lo[1], 0.0],
@@ -106,49 +115,56 @@ fn patches(shape: &ShapeDef, h: f64, lo: [f64; 3], hi: [f64; 3]) -> Vec<Patch> {
             }
             out
         }
-        ShapeDef::Sphere { radius } => cube_sphere([radius; 3], h.min(radius / 80.0)),
+        ShapeDef::Sphere { radius } => cube_sphere([radius; 3], curved(radius)),
         ShapeDef::Ellipsoid { radii } => {
             let rmin = radii[0].min(radii[1]).min(radii[2]);
-            cube_sphere(radii, h.min(rmin / 80.0))
+            cube_sphere(radii, curved(rmin))
         }
         ShapeDef::Cylinder { radius, length } => {
-            let h = h.min(radius / 80.0);
+            let hc = curved(radius);
             vec![Patch {
                 map: Box::new(move |u, v| {
                     let th = TAU * u;
                     [radius * th.cos(), radius * th.sin(), (v - 0.5) * length]
                 }),
-                nu: cells(TAU * radius, h),
+                nu: cells(TAU * radius, hc),
                 nv: cells(length, h),
             }]
         }
         ShapeDef::Torus { radius, tube } => {
-            let h = h.min(tube / 80.0);
             vec![Patch {
                 map: Box::new(move |u, v| {
                     let (th, ph) = (TAU * u, TAU * v - PI);
                     let rho = radius + tube * ph.cos();
                     [rho * th.cos(), rho * th.sin(), tube * ph.sin()]
                 }),
-                nu: cells(TAU * (radius + tube), h),
-                nv: cells(TAU * tube, h),
+                nu: cells(TAU * (radius + tube), curved(radius + tube)),
+                nv: cells(TAU * tube, curved(tube)),
             }]
         }
     }
 }
 
 /// The layer of `shape` over the local box `lo..hi` (where tracked nodes can meet it),
-/// facets about `h` wide, h/2 deep.
+/// facets about `h` wide, h/2 deep; coarser where that would be over [`MAX_FACETS`].
 pub fn rigid_layer(shape: &ShapeDef, lo: [f64; 3], hi: [f64; 3], h: f64) -> RigidLayer {
     let projector = shape.build();
-    let mut layer = RigidLayer {
-        nodes: Vec::new(),
-        elems: Vec::new(),
-    };
-    for p in &patches(shape, h, lo, hi) {
-        add_patch(&mut layer, p, projector.as_ref(), lo, hi, 0.5 * h);
+    let mut f = 1.0;
+    loop {
+        let mut layer = RigidLayer {
+            nodes: Vec::new(),
+            elems: Vec::new(),
+        };
+        for p in &patches(shape, h, f, lo, hi) {
+            add_patch(&mut layer, p, projector.as_ref(), lo, hi, 0.5 * h);
+        }
+        // A layer already one facet a patch cannot be coarsened further.
+        if layer.elems.len() <= MAX_FACETS || f > 1e6 {
+            return layer;
+        }
+        // Facets scale as 1/f² on a surface; a little more so that it lands under.
+        f *= 1.05 * (layer.elems.len() as f64 / MAX_FACETS as f64).sqrt();
     }
-    layer
 }
 
 fn inside(p: [f64; 3], lo: [f64; 3], hi: [f64; 3]) -> bool {
@@ -276,10 +292,10 @@ mod tests {
             [30.0, 30.0, -40.0],
             2.5,
         );
-        // Facets no wider than R/80 (diagonals ≤ √2 R/80, a little more off the cube-face centres).
+        // Facets no wider than h (diagonals ≤ √2 h, a little more off the cube-face centres).
         for e in &layer.elems {
             let d = norm(sub(layer.nodes[e[6]], layer.nodes[e[4]]));
-            assert!(d < 1.6 * r / 80.0 * 2f64.sqrt(), "facet diagonal {d}");
+            assert!(d < 1.6 * 2.5 * 2f64.sqrt(), "facet diagonal {d}");
         }
         // Only the cap inside the box: every outer node lies below z = −40 + a facet.
         assert!(layer
@@ -336,5 +352,19 @@ mod tests {
             big.1,
             2.0,
         );
+    }
+
+    #[test]
+    fn a_fine_slave_mesh_gives_at_most_the_facet_cap() {
+        let layer = rigid_layer(
+            &ShapeDef::Cylinder {
+                radius: 4.0,
+                length: 10.0,
+            },
+            [-10.0; 3],
+            [10.0; 3],
+            0.01,
+        );
+        assert!(layer.elems.len() <= MAX_FACETS && layer.elems.len() > MAX_FACETS / 3);
     }
 }

@@ -10,7 +10,7 @@
 //! `*BOUNDARY`, `*CLOAD`, `*DLOAD` (P1…P6 pressures). Every other keyword, option or data
 //! line is listed with its line, in the deck's header and on stderr: nothing is dropped
 //! silently. Numbers are the file's: the deck's unit label is chosen from E's size and
-//! says so.
+//! says so. A file `alfe export` wrote carries `** alfe` notes: see [`super::abaqus_notes`].
 
 use crate::mesh::abaqus::{
     fields, flag, keyword, param, read_inp, read_lines, read_surface_inp, Line, Loader,
@@ -543,16 +543,30 @@ pub fn import_inp(path: &Path, deck_path: &Path, load: &Loader) -> Result<Import
     } else {
         read_inp(path, 0, load)?.node_groups.into_keys().collect()
     };
+    let notes = super::abaqus_notes::read(&load(path)?, path)?;
     let mut m = Model::default();
     let mut block = Block::Skip;
-    for line in &lines {
+    for line in lines
+        .iter()
+        .filter(|l| !notes.as_ref().is_some_and(|n| n.in_layer(l)))
+    {
         if let Some(kw) = keyword(&line.text) {
-            block = open_keyword(&mut m, line, &kw);
+            block = match &notes {
+                Some(n) if n.covers(&kw) => Block::Quiet,
+                _ => open_keyword(&mut m, line, &kw),
+            };
             continue;
         }
         data_line(&mut m, block, line, &mesh)?;
     }
-    write_deck(&m, path, deck_path)
+    let mut imported = write_deck(&m, path, deck_path)?;
+    if let Some(n) = &notes {
+        imported.deck = n.apply(&imported.deck, &lines)?;
+        if n.edited {
+            imported.untranslated.push(n.edited_warning());
+        }
+    }
+    Ok(imported)
 }
 
 /// A path as the deck should name it: relative to the deck's directory where it can be.

@@ -358,8 +358,13 @@ pub enum MeshDeck {
     /// An Abaqus/CalculiX input file (`.inp`): its `*NODE`, `*ELEMENT` (C3D8, C3D4,
     /// C3D10, C3D6 and variants), `*NSET`, `*ELSET`, `*SURFACE` and `*INCLUDE`; sets and
     /// surfaces become groups under the file's names. Its model keywords are not read
-    /// here (`alfe import` translates them).
-    Abaqus { file: String },
+    /// here (`alfe import` translates them). `elset`: only that element set's elements
+    /// (a file holding more than this part); default all of them.
+    Abaqus {
+        file: String,
+        #[serde(default)]
+        elset: Option<String>,
+    },
     /// An LS-DYNA keyword file (`.k`): `*NODE`, `*ELEMENT_SOLID` (hex8, degenerate
     /// tets and wedges, 10-node tets), `*PART` (groups by title), `*SET_NODE_LIST`,
     /// `*SET_SEGMENT`, `*INCLUDE`. `pid`: only that LS-DYNA part's solids (one alfe part
