@@ -91,6 +91,8 @@ struct Model {
     node_sets: BTreeMap<String, String>,
     /// Surfaces the deck defines: name → mesh group.
     surfaces: BTreeMap<String, String>,
+    /// Ties, contact pairs and couplings; their TOML once resolved.
+    contact: (super::abaqus_contact::Contact, String),
 }
 
 fn num(s: &str, line: &Line) -> Result<f64, String> {
@@ -264,24 +266,10 @@ enum Block {
     Dload,
     /// Listed line by line as not translated.
     Skip,
+    Contact,
     /// Output requests: listed once, data lines not.
     Quiet,
 }
-
-const OUTPUT_KEYWORDS: &[&str] = &[
-    "NODE PRINT",
-    "EL PRINT",
-    "NODE FILE",
-    "EL FILE",
-    "OUTPUT",
-    "NODE OUTPUT",
-    "ELEMENT OUTPUT",
-    "CONTACT PRINT",
-    "CONTACT FILE",
-    "CONTACT OUTPUT",
-    "SECTION PRINT",
-    "ENERGY PRINT",
-];
 
 /// Read the keyword line `line` (keyword `kw`) into the model; its data lines' block.
 fn open_keyword(m: &mut Model, line: &Line, kw: &str) -> Block {
@@ -401,7 +389,11 @@ fn open_keyword(m: &mut Model, line: &Line, kw: &str) -> Block {
                 _ => Block::Dload,
             }
         }
-        _ if OUTPUT_KEYWORDS.contains(&kw) => {
+        _ if super::abaqus_contact::KEYWORDS.contains(&kw) => {
+            m.contact.0.open(line, kw, &mut m.untranslated);
+            Block::Contact
+        }
+        _ if super::abaqus_contact::OUTPUT_KEYWORDS.contains(&kw) => {
             m.skip(
                 line,
                 "output request: alfe writes every field to its HDF5 file",
@@ -517,8 +509,13 @@ fn data_line(m: &mut Model, block: Block, line: &Line, mesh: &Groups) -> Result<
                 );
             }
         }
+        Block::Boundary | Block::Cload
+            if m.contact
+                .0
+                .reference_line(&f, line, block == Block::Boundary)? => {}
         Block::Boundary => m.boundary(&f, line, mesh)?,
         Block::Cload => m.cload(&f, line, mesh)?,
+        Block::Contact => m.contact.0.data(line, &mut m.untranslated)?,
         Block::Dload => m.dload(&f, line)?,
         Block::Skip => m.skip(line, "data of a keyword not translated"),
     }
@@ -533,18 +530,22 @@ pub fn import_inp(path: &Path, deck_path: &Path, load: &Loader) -> Result<Import
         .iter()
         .any(|l| keyword(&l.text).as_deref() == Some("SHELL SECTION"));
     // Validate the mesh as what the deck will read it as; the names it may refer to.
-    let mesh: Groups = if shells {
+    let (mesh, faces): (Groups, Groups) = if shells {
         let s = read_surface_inp(path, load)?;
-        s.point_groups
-            .keys()
-            .chain(s.quad_groups.keys())
-            .cloned()
-            .collect()
+        let g = s.point_groups.keys().chain(s.quad_groups.keys());
+        (g.cloned().collect(), Vec::new())
     } else {
-        read_inp(path, 0, load)?.node_groups.into_keys().collect()
+        let r = read_inp(path, 0, load)?;
+        (
+            r.node_groups.into_keys().collect(),
+            r.face_groups.into_keys().collect(),
+        )
     };
     let notes = super::abaqus_notes::read(&load(path)?, path)?;
     let mut m = Model::default();
+    if notes.is_none() {
+        m.contact.0 = super::abaqus_contact::Contact::new(&lines);
+    }
     let mut block = Block::Skip;
     for line in lines
         .iter()
@@ -559,6 +560,13 @@ pub fn import_inp(path: &Path, deck_path: &Path, load: &Loader) -> Result<Import
         }
         data_line(&mut m, block, line, &mesh)?;
     }
+    m.contact.1 = m.contact.0.resolve(
+        &faces,
+        &mesh,
+        &mut m.surfaces,
+        &mut m.node_sets,
+        &mut m.untranslated,
+    );
     let mut imported = write_deck(&m, path, deck_path)?;
     if let Some(n) = &notes {
         imported.deck = n.apply(&imported.deck, &lines)?;
@@ -785,6 +793,7 @@ fn write_deck(m: &Model, path: &Path, deck_path: &Path) -> Result<Imported, Stri
         );
     }
     write_actions(&mut out, &m.actions);
+    out += &m.contact.1;
     let (init, period) = m.step.unwrap_or((1.0, 1.0));
     let _ = writeln!(
         out,

@@ -4,6 +4,7 @@
 //! writes is one `alfe run` takes.
 
 pub mod abaqus;
+mod abaqus_contact;
 mod abaqus_notes;
 mod keyword_blocks;
 pub mod lsdyna;
