@@ -387,10 +387,9 @@ fn same_model(name: &str, a: &Scene, b: &Scene) {
     );
 }
 
-/// The paper scenes as `.k` files under `examples/paper/` (the entities as
-/// `*CONTACT_ENTITY` on rigid parts) import to the built-in models.
-#[test]
-fn paper_examples_import_to_the_built_in_models() {
+/// Every paper scene under `examples/paper/` as a file of extension `ext` imports to the
+/// built-in model.
+fn paper_examples_import(ext: &str) {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/paper");
     for name in [
         "taylor-bar",
@@ -401,37 +400,29 @@ fn paper_examples_import_to_the_built_in_models() {
         "bolted-bracket",
         "b-pillar",
     ] {
-        let k = dir.join(format!("{name}.k"));
-        let deck = temp_dir(&format!("paper-{name}")).join(format!("{name}.toml"));
-        alfe::app::import::import(&k, &deck).unwrap_or_else(|e| panic!("{name}: {e}"));
+        let file = dir.join(format!("{name}.{ext}"));
+        let deck = temp_dir(&format!("paper-{ext}-{name}")).join(format!("{name}.toml"));
+        alfe::app::import::import(&file, &deck).unwrap_or_else(|e| panic!("{name}: {e}"));
         let b = alfe::scene::read(&alfe::scene::load(deck.to_str().unwrap()).unwrap()).unwrap();
         let a = alfe::scene::read(&alfe::scene::load(name).unwrap()).unwrap();
         same_model(name, &a, &b);
     }
 }
 
-/// The paper scenes as Abaqus/CalculiX `.inp` files under `examples/paper/` (rigid walls
-/// and entities as CalculiX's rigid layers, pairs, bolts and couplings as its keywords,
-/// the exact entries on `** alfe` notes) import to the built-in models.
+/// The paper scenes as `.k` files (the entities as `*CONTACT_ENTITY` on rigid parts)
+/// import to the built-in models.
+#[test]
+fn paper_examples_import_to_the_built_in_models() {
+    paper_examples_import("k");
+}
+
+/// The paper scenes as Abaqus/CalculiX `.inp` files (rigid walls and entities as
+/// CalculiX's rigid layers, pairs, bolts and couplings as its keywords, the exact entries
+/// on `** alfe` notes) import to the built-in models.
 #[test]
 fn paper_inp_examples_import_to_the_built_in_models() {
+    paper_examples_import("inp");
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/paper");
-    for name in [
-        "taylor-bar",
-        "clip-tensile",
-        "rubber-indent",
-        "sphere-roll",
-        "panel-dent",
-        "bolted-bracket",
-        "b-pillar",
-    ] {
-        let inp = dir.join(format!("{name}.inp"));
-        let deck = temp_dir(&format!("paper-inp-{name}")).join(format!("{name}.toml"));
-        alfe::app::import::import(&inp, &deck).unwrap_or_else(|e| panic!("{name}: {e}"));
-        let b = alfe::scene::read(&alfe::scene::load(deck.to_str().unwrap()).unwrap()).unwrap();
-        let a = alfe::scene::read(&alfe::scene::load(name).unwrap()).unwrap();
-        same_model(name, &a, &b);
-    }
     // A file edited after export: the notes still win, and the import says so.
     let text = std::fs::read_to_string(dir.join("rubber-indent.inp")).unwrap();
     let edited = text.replacen("\n*FRICTION\n0.1, ", "\n*FRICTION\n0.3, ", 1);

@@ -178,6 +178,20 @@ pub struct ModelDef {
 }
 
 impl ModelDef {
+    /// The nodes of part `name`'s elements, sorted (empty for an unknown part).
+    pub fn part_nodes(&self, name: &str) -> Vec<usize> {
+        let Some(p) = self.part_names.iter().position(|n| n == name) else {
+            return Vec::new();
+        };
+        let mut ns: Vec<usize> = (0..self.mesh.n_elems())
+            .filter(|&e| self.mesh.elem_part[e] as usize == p)
+            .flat_map(|e| self.mesh.elem_nodes(e).to_vec())
+            .collect();
+        ns.sort_unstable();
+        ns.dedup();
+        ns
+    }
+
     /// Material index of each element.
     pub fn elem_material(&self, e: usize) -> usize {
         self.part_material[self.mesh.elem_part[e] as usize]

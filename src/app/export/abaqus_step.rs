@@ -58,13 +58,7 @@ pub fn initial_velocities(scene: &Scene) -> String {
     for (k, (set, v)) in m.initial_velocity.iter().enumerate() {
         let name = match set.strip_prefix("part:") {
             Some(part) => {
-                let p = m.part_names.iter().position(|n| n == part).unwrap_or(0) as u32;
-                let mut ns: Vec<usize> = (0..m.mesh.n_elems())
-                    .filter(|&e| m.mesh.elem_part[e] == p)
-                    .flat_map(|e| m.mesh.elem_nodes(e).to_vec())
-                    .collect();
-                ns.sort_unstable();
-                ns.dedup();
+                let ns = m.part_nodes(part);
                 let name = format!("IV_{}", k + 1);
                 let _ = writeln!(out, "*NSET, NSET={name}");
                 for chunk in ns.chunks(16) {

@@ -599,16 +599,7 @@ fn write_initial_velocity(out: &mut String, scene: &Scene, ids: &mut Ids) {
     let m = &scene.model;
     for (set, v) in &m.initial_velocity {
         let nodes = match set.strip_prefix("part:") {
-            Some(part) => {
-                let p = m.part_names.iter().position(|n| n == part).unwrap_or(0) as u32;
-                let mut ns: Vec<usize> = (0..m.mesh.n_elems())
-                    .filter(|&e| m.mesh.elem_part[e] == p)
-                    .flat_map(|e| m.mesh.elem_nodes(e).to_vec())
-                    .collect();
-                ns.sort_unstable();
-                ns.dedup();
-                ns
-            }
+            Some(part) => m.part_nodes(part),
             None => m.node_sets.get(set).cloned().unwrap_or_default(),
         };
         let sid = ids.set(&set.replace(':', "-"), &nodes);
