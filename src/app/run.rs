@@ -701,6 +701,7 @@ fn execute(
         residual_evaluations: totals.residual_evaluations,
         factorizations: totals.factorizations,
         retries: totals.retries,
+        solver_counts: totals.counts.clone(),
         contributions,
         analysis_steps: analysis_steps(&settings, &totals, &records),
         wall_time_s: t_start.elapsed().as_secs_f64(),

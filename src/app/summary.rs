@@ -37,6 +37,8 @@ pub struct Summary {
     pub residual_evaluations: usize,
     pub factorizations: usize,
     pub retries: usize,
+    /// Predictor solves, line-search backtracks, BFGS reforms.
+    pub solver_counts: crate::solve::record::SolverCounts,
     /// What the model's contributions report: the largest value over the run of the
     /// history columns that ask for it (`max_penetration` with contact), and each
     /// contribution's entry at the last converged step by group (`walls`: force, moment

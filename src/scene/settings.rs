@@ -243,7 +243,7 @@ pub(super) fn run_settings(deck: &Deck, timeline: &Timeline) -> RunSettings {
             fd_delta: s.fd_delta,
             fd_rule: s.fd_step,
             char_length: 0.0,
-            line_search: s.line_search.unwrap_or(false),
+            line_search: s.line_search.map(|l| l.setting()).unwrap_or_default(),
             export_system: None,
         },
         output: OutputSettings {

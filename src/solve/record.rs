@@ -49,6 +49,8 @@ pub struct RunTotals {
     pub residual_evaluations: usize,
     pub factorizations: usize,
     pub retries: usize,
+    /// The solver's counts beyond iterations (predictor solves, backtracks, reforms).
+    pub counts: SolverCounts,
     pub seconds_assembly: f64,
     pub seconds_linear: f64,
     /// Of `seconds_linear`, the preconditioner's setups.
@@ -64,6 +66,17 @@ pub struct RunTotals {
     /// Counts by analysis step (`Analysis::stages`; one entry without stages), failed
     /// attempts included.
     pub by_stage: Vec<StageTotals>,
+}
+
+/// What the nonlinear solves did besides their iterations (`summary.json` `solver_counts`).
+#[derive(Debug, Clone, Default, serde::Serialize)]
+pub struct SolverCounts {
+    /// Tangent predictor solves that imposed prescribed values (also iterations).
+    pub predictor_solves: usize,
+    /// Line-search trials beyond the full step.
+    pub line_search_backtracks: usize,
+    /// BFGS stiffness reforms.
+    pub bfgs_reforms: usize,
 }
 
 /// One analysis step's share of [`RunTotals`].
@@ -99,6 +112,9 @@ impl RunTotals {
         self.linear_iterations += s.linear_iterations;
         self.residual_evaluations += s.residual_evaluations;
         self.factorizations += s.factorizations;
+        self.counts.predictor_solves += s.predictor_solves;
+        self.counts.line_search_backtracks += s.backtracks;
+        self.counts.bfgs_reforms += s.reforms;
         self.seconds_assembly += s.seconds_assembly;
         self.seconds_linear += s.seconds_linear;
         self.seconds_pc_setup += s.seconds_pc_setup;

@@ -7,7 +7,9 @@ use crate::linalg::matrix::DistMatrix;
 use crate::model::Model;
 use crate::parallel::Comm;
 use crate::solve::control::StepControl;
-use crate::solve::nonlinear::{NonlinearOptions, NonlinearProblem, Preconditioning, Solver};
+use crate::solve::nonlinear::{
+    NonlinearOptions, NonlinearProblem, Preconditioning, Solver, Start,
+};
 pub use crate::solve::record::{Attempt, Flow, Resume, RunTotals, StageTotals, StepRecord};
 use crate::solve::{Analysis, Predictor};
 use crate::Result;
@@ -83,15 +85,22 @@ pub fn run_static(
             last = None;
         }
         let stage = ctl.stage();
+        let mut predicted = false;
         if let (Predictor::Linear, Some((du, dt)), false) = (analysis.predictor, &last, failed) {
             let s = (t - t_n) / dt;
             for (x, d) in trial.iter_mut().zip(du) {
                 *x += s * d;
             }
+            predicted = true;
         }
         let stats = {
             let mut prob = StaticProblem { model, time: t };
-            solver.solve(comm, &mut prob, &mut trial, &mut r, &g)?
+            let start = if predicted {
+                Start::Predicted(u.as_slice())
+            } else {
+                Start::Tangent
+            };
+            solver.solve(comm, &mut prob, &mut trial, &mut r, &g, start)?
         };
         tot.add_in(stage, &stats);
         if !stats.converged {

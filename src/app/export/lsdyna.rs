@@ -639,8 +639,8 @@ fn write_controls(out: &mut String, scene: &Scene) {
     // The settings LS-DYNA's cards do not say as alfe means them, where not alfe's
     // defaults.
     let d = crate::scene::deck::SolverDeck::default();
-    if s.line_search {
-        out.push_str("$alfe line_search = true\n");
+    if s.line_search != crate::solve::nonlinear::LineSearch::default() {
+        let _ = writeln!(out, "$alfe line_search = {}", line_search_text(s.line_search));
     }
     for (key, v, dv) in [
         ("residual_rtol", s.residual_rtol, d.residual_rtol),
@@ -654,5 +654,13 @@ fn write_controls(out: &mut String, scene: &Scene) {
     }
     if s.bfgs_reform != d.bfgs_reform {
         let _ = writeln!(out, "$alfe bfgs_reform = {}", s.bfgs_reform);
+    }
+}
+
+/// `line_search` as the deck writes it.
+fn line_search_text(l: crate::solve::nonlinear::LineSearch) -> &'static str {
+    match l {
+        crate::solve::nonlinear::LineSearch::Auto => "\"auto\"",
+        other => other.name(),
     }
 }

@@ -81,6 +81,32 @@ pub struct PartitionDeck {
     pub axis: Option<Comp>,
 }
 
+/// `[solver] line_search`: `true`, `false` or `"auto"`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(untagged)]
+pub enum LineSearchDeck {
+    Flag(bool),
+    Word(LineSearchWord),
+}
+
+/// The word form of `line_search`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum LineSearchWord {
+    Auto,
+}
+
+impl LineSearchDeck {
+    pub fn setting(self) -> crate::solve::nonlinear::LineSearch {
+        use crate::solve::nonlinear::LineSearch;
+        match self {
+            LineSearchDeck::Flag(true) => LineSearch::On,
+            LineSearchDeck::Flag(false) => LineSearch::Off,
+            LineSearchDeck::Word(LineSearchWord::Auto) => LineSearch::Auto,
+        }
+    }
+}
+
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum PartitionMethodDeck {
@@ -637,11 +663,12 @@ pub struct SolverDeck {
     pub energy_rtol: f64,
     #[serde(default)]
     pub linear: LinearDeck,
-    /// Backtracking (Armijo) line search on ‖r_free‖, off by default: on the large-rotation
-    /// scenes full steps overshoot and then converge, and residual backtracking slows
-    /// or stalls Newton and JFNK (measured on `cantilever` and `twisted-block`).
+    /// Backtracking (Armijo) line search on ‖r_free‖ of Newton and JFNK: `true`, `false`
+    /// or `"auto"` (default: full steps unless one multiplies ‖r‖ by more than 1000).
+    /// Always-on backtracking slows or stalls Newton and JFNK on large rotations, where
+    /// full steps overshoot and then converge (`cantilever`, `twisted-block`).
     #[serde(default)]
-    pub line_search: Option<bool>,
+    pub line_search: Option<LineSearchDeck>,
     /// JFNK: relative finite-difference perturbation δ (of an element length).
     #[serde(default = "d_fd_delta")]
     pub fd_delta: f64,

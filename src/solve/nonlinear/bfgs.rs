@@ -8,10 +8,9 @@
 //!   to the tight linear tolerance, preconditioned by that factorization (one GMRES
 //!   iteration on one rank, where block Jacobi is an exact factorization). The
 //!   factorization is kept until the next reform whatever `pc.lag` says.
-//! * **First iteration** of a step: exactly Newton's (module doc of `newton`): the
-//!   prescribed increment Δu_c = g − u_c is imposed with the coupling −K_fc (g − u_c) on
-//!   the right-hand side, and that iteration takes the full step. Afterwards u_c = g
-//!   holds exactly and every vector lives on the free dofs (constrained entries zero).
+//! * **Prescribed values** hold before the first residual (the solver context's
+//!   predictor), so the first reform is at the new pose and every vector lives on the
+//!   free dofs (constrained entries zero).
 //! * **Search direction** d = −H r with H the BFGS inverse built from H₀ = K₀⁻¹ and
 //!   the pairs (s, y), s = u_{k+1} − u_k, y = r_{k+1} − r_k, kept since the last reform:
 //!   the two-loop recursion (Nocedal & Wright, *Numerical Optimization*, Alg. 7.4),
@@ -23,8 +22,7 @@
 //!   ‖s‖, ‖y‖, and s_iᵀ r for the first loop) and one for y_iᵀ H₀ q (second loop) that
 //!   also gives the slope dᵀ r for the line search; each line-search trial adds the
 //!   residual evaluation's reduction and one for its slope.
-//! * **Line search**: always (whatever `opts.line_search` says), except on the first
-//!   iteration that imposes a prescribed increment. A length is accepted when ‖r_free‖
+//! * **Line search**: always (whatever `opts.line_search` says). A length is accepted when ‖r_free‖
 //!   decreases sufficiently (Armijo, the test of `SolverContext::line_search`) or when the
 //!   energy slope along d has dropped, |dᵀ r(u + λ d)| ≤ ½ |dᵀ r(u)| (Matthies & Strang's
 //!   line search, also that of ADINA and LS-DYNA); overshoot is corrected by regula
@@ -39,13 +37,18 @@
 //!   is then discarded (u back to the last accepted point) and a fresh Newton direction
 //!   is taken from there. Along a direction computed
 //!   with a fresh K and no pairs (Newton's) that no length satisfies, the full step is
-//!   taken, as Newton without a line search does.
+//!   taken, as Newton without a line search does; (iii) automatically, when two
+//!   accepted iterations in a row each reduce ‖r_free‖ by less than
+//!   1 − [`SLOW_CONTRACTION`] (LS-DYNA's automatic reformation on a stalled BFGS; the
+//!   fixed `bfgs_reform` alone stalled on the B-pillar). More than [`MAX_REFORMS`]
+//!   reforms in one solve end it as stagnated: by then it is a costlier Newton.
 //!
 //! Convergence, failure reasons and statistics are those of the other solvers
 //! ([`super::context::SolverContext`], `common::Monitor`); `iterations` counts search
 //! directions.
 
-use super::common::{Eval, Monitor};
+use super::common::Eval;
+use super::Failure;
 use super::context::{Next, NonlinearSolver, SolverContext};
 use crate::parallel::Comm;
 use crate::Result;
@@ -60,6 +63,12 @@ const MAX_TRIALS: usize = 6;
 /// Energy tolerance of the line search: |dᵀ r(u + λ d)| ≤ STOL |dᵀ r(u)|
 /// (Matthies & Strang recommend 0.5).
 pub const STOL: f64 = 0.5;
+
+/// An accepted iteration with ‖r_{k+1}‖ > SLOW_CONTRACTION ‖r_k‖ is slow; two in a row
+/// reform.
+pub const SLOW_CONTRACTION: f64 = 0.8;
+/// Reforms allowed in one solve before it is stagnated.
+pub const MAX_REFORMS: usize = 12;
 
 /// The stored BFGS pairs with their Gram matrix `sy[i][j] = s_iᵀ y_j` and ρ_i = 1/s_iᵀy_i.
 #[derive(Default)]
@@ -232,8 +241,6 @@ fn dot(a: &[f64], b: &[f64]) -> f64 {
 /// `iterations` counts search directions.
 pub struct Bfgs {
     reform_every: usize,
-    gap: Vec<f64>,
-    kd: Vec<f64>,
     rhs: Vec<f64>,
     d: Vec<f64>,
     pairs: Pairs,
@@ -249,6 +256,8 @@ pub struct Bfgs {
     k_at_current: bool,
     /// The preconditioner's lag outside the solve.
     lag: usize,
+    /// Slow accepted iterations in a row ([`SLOW_CONTRACTION`]).
+    slow: usize,
 }
 
 impl Bfgs {
@@ -256,8 +265,6 @@ impl Bfgs {
     pub fn new(n: usize, reform: usize) -> Self {
         Self {
             reform_every: reform.max(1),
-            gap: vec![0.0; n],
-            kd: vec![0.0; n],
             rhs: vec![0.0; n],
             d: vec![0.0; n],
             pairs: Pairs::default(),
@@ -267,69 +274,45 @@ impl Bfgs {
             since_reform: 0,
             k_at_current: false,
             lag: 0,
+            slow: 0,
         }
     }
 
-    /// Reassemble K at `u`, compute the prescribed-increment coupling K (g − u_c) into
-    /// `kd` when there is a gap, constrain and factor; clear the pairs. `Ok(false)`:
-    /// failed (reason set).
-    fn reform(&mut self, cx: &mut SolverContext, ev: &Eval) -> Result<bool> {
+    /// Reassemble K at `u`, constrain and factor it; clear the pairs. `Ok(false)`:
+    /// failed (reason set: beyond [`MAX_REFORMS`], stagnated).
+    fn reform(&mut self, cx: &mut SolverContext) -> Result<bool> {
+        if cx.stats.reforms >= MAX_REFORMS {
+            cx.stats.fail(
+                Failure::Stagnated,
+                format!("stagnated: {MAX_REFORMS} reforms of the BFGS stiffness in one increment"),
+            );
+            return Ok(false);
+        }
         let t1 = Instant::now();
         if !cx.jacobian()? {
             cx.stats.seconds_assembly += t1.elapsed().as_secs_f64();
             return Ok(false);
         }
-        cx.coupling(ev, &mut self.gap, &mut self.kd);
         cx.constrain();
         cx.stats.seconds_assembly += t1.elapsed().as_secs_f64();
         if cx.pc.is_factored() && !cx.refactor() {
             return Ok(false);
         }
+        cx.stats.reforms += 1;
         self.pairs.clear();
         self.a.clear();
         self.need_reform = false;
         self.since_reform = 0;
+        self.slow = 0;
         self.k_at_current = true;
         Ok(true)
-    }
-
-    /// Newton's first iteration: K₀ Δu = −r − K_fc (g − u_c), Δu_c = g − u_c, full step
-    /// (the coupling `kd` was computed by the reform at this point).
-    fn impose(&mut self, cx: &mut SolverContext) -> Result<Next> {
-        for i in 0..cx.n() {
-            self.rhs[i] = if cx.cons.is_c[i] {
-                self.gap[i]
-            } else {
-                -cx.r[i] - self.kd[i]
-            };
-        }
-        self.d.copy_from_slice(&self.gap);
-        if cx.linear_solve(&self.rhs, &mut self.d)?.is_none() {
-            return Ok(Next::Stop);
-        }
-        cx.stats.iterations += 1;
-        self.since_reform += 1;
-        for i in 0..cx.n() {
-            cx.u[i] += self.d[i];
-        }
-        for &(dof, g) in cx.cons.prescribed {
-            cx.u[dof] = g;
-        }
-        let Some(ev) = cx.evaluate()? else {
-            return Ok(Next::Stop);
-        };
-        let measured = Monitor::measure(cx.comm, &self.d, &self.rf, &cx.cons.is_c);
-        cx.monitor.record(measured, 1.0);
-        self.rf.copy_from_slice(cx.r);
-        cx.cons.zero_constrained(&mut self.rf);
-        self.k_at_current = false;
-        Ok(Next::Moved(ev))
     }
 
     /// A quasi-Newton iteration: d = −H r_f by the two-loop recursion with H₀ = K₀⁻¹, the
     /// line search along it, the new pair. A failure along a quasi-Newton direction
     /// discards the iteration and reforms.
     fn quasi_newton(&mut self, cx: &mut SolverContext, ev: &Eval) -> Result<Next> {
+        let rn_before = ev.rn;
         let alpha = self.pairs.first_loop(&self.a, &self.rf, &mut self.rhs);
         self.d.iter_mut().for_each(|x| *x = 0.0);
         if cx.linear_solve(&self.rhs, &mut self.d)?.is_none() {
@@ -386,6 +369,14 @@ impl Bfgs {
         // ‖s‖ = λ‖d‖ and the energy λ|dᵀr| of the correction taken.
         cx.monitor.record((sn / lambda, g0.abs()), lambda);
         self.k_at_current = false;
+        self.slow = if ev.rn > SLOW_CONTRACTION * rn_before {
+            self.slow + 1
+        } else {
+            0
+        };
+        if self.slow >= 2 {
+            self.need_reform = true;
+        }
         Ok(Next::Moved(ev))
     }
 }
@@ -404,17 +395,11 @@ impl NonlinearSolver for Bfgs {
             self.rf = cx.r.to_vec();
             cx.cons.zero_constrained(&mut self.rf);
         }
-        let reform = self.need_reform
-            || self.since_reform >= self.reform_every
-            || (ev.gap > 0.0 && !self.k_at_current);
-        if reform && !self.reform(cx, ev)? {
+        let reform = self.need_reform || self.since_reform >= self.reform_every;
+        if reform && !self.reform(cx)? {
             return Ok(Next::Stop);
         }
-        if ev.gap > 0.0 {
-            self.impose(cx)
-        } else {
-            self.quasi_newton(cx, ev)
-        }
+        self.quasi_newton(cx, ev)
     }
 
     fn finish(&mut self, cx: &mut SolverContext) {

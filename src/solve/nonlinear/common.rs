@@ -244,7 +244,7 @@ mod tests {
             fd_delta: 1e-4,
             fd_rule: FdRule::Element,
             char_length: 1.0,
-            line_search: false,
+            line_search: crate::solve::nonlinear::LineSearch::Off,
             export_system: None,
         }
     }

@@ -6,7 +6,9 @@
 //! once here; a method ([`NonlinearSolver`]: Newton, BFGS, JFNK) provides only its step.
 
 use super::common::{Constraints, Eval, Monitor, Verdict};
-use super::{Failure, NonlinearOptions, NonlinearProblem, Preconditioning, SolveStats};
+use super::{
+    Failure, LineSearch, NonlinearOptions, NonlinearProblem, Preconditioning, SolveStats,
+};
 use crate::linalg::gmres::{gmres, GmresStats};
 use crate::linalg::matrix::DistMatrix;
 use crate::parallel::Comm;
@@ -29,8 +31,9 @@ impl<'o> Solver<'o> {
 
     /// Solve one load step with the method of `opts.kind`: r(u) = 0 on the free dofs
     /// with u_c = g on `prescribed` (owned local dof, value). `u` holds the start point
-    /// and receives the solution; `r` the final residual. Non-convergence is `Ok` with
-    /// `converged = false`; only runtime failures are `Err`.
+    /// (`start` says whether it is a prediction) and receives the solution; `r` the final
+    /// residual. Non-convergence is `Ok` with `converged = false`; only runtime failures
+    /// are `Err`.
     pub fn solve(
         &mut self,
         comm: &dyn Comm,
@@ -38,11 +41,73 @@ impl<'o> Solver<'o> {
         u: &mut [f64],
         r: &mut [f64],
         prescribed: &[(usize, f64)],
+        start: Start,
     ) -> Result<SolveStats> {
-        let mut method = self.opts.kind.method(u.len(), self.opts);
+        self.solve_with(self.opts.kind, comm, problem, u, r, prescribed, start)
+    }
+
+    /// [`Solver::solve`] with the method `kind` instead of the options' one.
+    #[allow(clippy::too_many_arguments)]
+    pub fn solve_with(
+        &mut self,
+        kind: super::SolverKind,
+        comm: &dyn Comm,
+        problem: &mut dyn NonlinearProblem,
+        u: &mut [f64],
+        r: &mut [f64],
+        prescribed: &[(usize, f64)],
+        start: Start,
+    ) -> Result<SolveStats> {
+        let mut method = kind.method(u.len(), self.opts);
         let mut cx = SolverContext::new(comm, self, problem, u, r, prescribed);
-        cx.run(method.as_mut())?;
+        cx.run(method.as_mut(), start)?;
         Ok(cx.stats)
+    }
+}
+
+/// Where a solve starts: how its prescribed values are brought in before the method's
+/// first residual, so that its first linearization is at the new pose.
+#[derive(Debug, Clone, Copy)]
+pub enum Start<'b> {
+    /// `u` is the converged state: the tangent predictor imposes the prescribed values.
+    Tangent,
+    /// `u` is a prediction (extrapolated, or the time integrator's) from the converged
+    /// state `base`; how well it foresees the prescribed values decides ([`Prediction`]).
+    Predicted(&'b [f64]),
+}
+
+/// How well a prediction foresees the prescribed values g of an increment from the
+/// converged state u₀: by the miss ‖g − u_c‖ against the increment ‖g − u₀_c‖.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Prediction {
+    /// Within [`EXACT_PREDICTION`] of the increment (a wall moving at constant speed): the
+    /// prescribed values are set exactly and no solve is made.
+    Exact,
+    /// Within [`CLOSE_PREDICTION`] (a rotation changing pace): the tangent predictor
+    /// imposes the rest from the predicted point.
+    Close,
+    /// Farther (the motion stopped or turned): the prediction is dropped and the tangent
+    /// predictor starts from the converged state.
+    Wrong,
+}
+
+/// A prediction this close to the prescribed values (relative to the increment) is
+/// [`Prediction::Exact`].
+pub const EXACT_PREDICTION: f64 = 1e-6;
+/// A prediction this close is [`Prediction::Close`]; farther, [`Prediction::Wrong`].
+pub const CLOSE_PREDICTION: f64 = 0.5;
+
+impl Prediction {
+    /// Classify the miss `gap` = ‖g − u_c‖ against the increment `inc` = ‖g − u₀_c‖
+    /// (global norms, so every rank decides alike).
+    pub fn of(gap: f64, inc: f64) -> Self {
+        if gap <= EXACT_PREDICTION * inc {
+            Prediction::Exact
+        } else if gap <= CLOSE_PREDICTION * inc {
+            Prediction::Close
+        } else {
+            Prediction::Wrong
+        }
     }
 }
 
@@ -92,6 +157,10 @@ pub struct SolverContext<'a> {
     pub stats: SolveStats,
     /// The force scale of the divergence test: max(‖r‖, f_ref) at the start point.
     scale: f64,
+    /// The next correction is taken in full (the first after a snapped prediction).
+    full_next: bool,
+    /// The predictor's evaluation of the start point, if it made one.
+    first: Option<Eval>,
 }
 
 impl<'a> SolverContext<'a> {
@@ -118,6 +187,8 @@ impl<'a> SolverContext<'a> {
             monitor: Monitor::default(),
             stats: SolveStats::default(),
             scale: 0.0,
+            full_next: false,
+            first: None,
         }
     }
 
@@ -126,19 +197,135 @@ impl<'a> SolverContext<'a> {
         self.u.len()
     }
 
-    /// Run `method` to convergence or failure. Non-convergence is `Ok` with
-    /// `converged = false` in the statistics; only runtime failures are `Err`.
-    pub fn run(&mut self, method: &mut dyn NonlinearSolver) -> Result<()> {
+    /// Bring the prescribed values in from `start` (module doc of [`Start`]), then run
+    /// `method` to convergence or failure. Non-convergence is `Ok` with `converged =
+    /// false` in the statistics; only runtime failures are `Err`.
+    pub fn run(&mut self, method: &mut dyn NonlinearSolver, start: Start) -> Result<()> {
+        if !self.predict(start)? {
+            return Ok(());
+        }
         let out = self.iterate_with(method);
         method.finish(self);
         out
+    }
+
+    /// ‖g − u_c‖ and ‖g − base_c‖ over the prescribed dofs (one reduction).
+    fn misses(&self, base: &[f64]) -> (f64, f64) {
+        let mut s = [0.0, 0.0];
+        for &(d, g) in self.cons.prescribed {
+            s[0] += (g - self.u[d]).powi(2);
+            s[1] += (g - base[d]).powi(2);
+        }
+        self.comm.allreduce_sum(&mut s);
+        (s[0].sqrt(), s[1].sqrt())
+    }
+
+    /// Set the prescribed values before the method's first residual. A prediction that
+    /// foresees them is snapped to them; otherwise the tangent predictor
+    /// ([`SolverContext::tangent_predictor`]) imposes them from the predicted point
+    /// (close) or from the converged state (wrong, or no prediction). `Ok(false)`: the
+    /// predictor failed (reason set).
+    fn predict(&mut self, start: Start) -> Result<bool> {
+        let gap = match start {
+            Start::Tangent => self.misses(&self.u.to_vec()).0,
+            Start::Predicted(base) => {
+                let (gap, inc) = self.misses(base);
+                match Prediction::of(gap, inc) {
+                    Prediction::Exact => {
+                        self.snap();
+                        // Its first correction is the one the predictor would have made:
+                        // taken in full, like the predictor's.
+                        self.full_next = inc > 0.0;
+                        0.0
+                    }
+                    Prediction::Close => gap,
+                    Prediction::Wrong => {
+                        self.u.copy_from_slice(base);
+                        inc
+                    }
+                }
+            }
+        };
+        if gap == 0.0 {
+            return Ok(true);
+        }
+        self.tangent_predictor()
+    }
+
+    /// u_c = g exactly.
+    fn snap(&mut self) {
+        for &(d, g) in self.cons.prescribed {
+            self.u[d] = g;
+        }
+    }
+
+    /// The tangent predictor (Abaqus's and FEAP's first iteration of an increment with
+    /// prescribed motion): K(u) Δu = −r(u) − K_fc Δg on the free dofs with Δu_c = Δg =
+    /// g − u_c, then u_c = g exactly; the free part is halved while an element inverts.
+    /// Counted as an iteration and in `predictor_solves`. `Ok(false)`: failed (reason
+    /// set).
+    fn tangent_predictor(&mut self) -> Result<bool> {
+        let n = self.n();
+        let Some(ev) = self.evaluate()? else {
+            return Ok(false);
+        };
+        let t1 = Instant::now();
+        if !self.jacobian()? {
+            return Ok(false);
+        }
+        let (mut dg, mut kd) = (vec![0.0; n], vec![0.0; n]);
+        self.coupling(&ev, &mut dg, &mut kd);
+        let rhs: Vec<f64> = (0..n)
+            .map(|i| {
+                if self.cons.is_c[i] {
+                    dg[i]
+                } else {
+                    -self.r[i] - kd[i]
+                }
+            })
+            .collect();
+        self.constrain();
+        self.stats.seconds_assembly += t1.elapsed().as_secs_f64();
+        let mut du = dg.clone();
+        if self.linear_solve(&rhs, &mut du)?.is_none() {
+            return Ok(false);
+        }
+        self.stats.iterations += 1;
+        self.stats.predictor_solves += 1;
+        let measured = Monitor::measure(self.comm, &du, self.r, &self.cons.is_c);
+        let base = self.u.to_vec();
+        let mut lambda = 1.0;
+        loop {
+            for i in 0..n {
+                self.u[i] = base[i] + lambda * du[i];
+            }
+            self.snap();
+            // A full predictor that inverts an element is shortened on the free dofs (at
+            // most 5 halvings); the first residual of the method then tests the point.
+            if lambda <= 0.05 {
+                break;
+            }
+            if let Some(ev) = self.evaluate()? {
+                self.first = Some(ev);
+                break;
+            }
+            self.stats.failure = None;
+            self.stats.reason.clear();
+            lambda *= 0.5;
+        }
+        self.monitor.record(measured, lambda);
+        Ok(true)
     }
 
     fn iterate_with(&mut self, method: &mut dyn NonlinearSolver) -> Result<()> {
         if !method.setup(self)? {
             return Ok(());
         }
-        let Some(mut ev) = self.evaluate()? else {
+        let first = match self.first.take() {
+            Some(ev) => Some(ev),
+            None => self.evaluate()?,
+        };
+        let Some(mut ev) = first else {
             return Ok(());
         };
         self.scale = ev.rn.max(ev.f_ref);
@@ -336,48 +523,203 @@ impl<'a> SolverContext<'a> {
         unreachable!()
     }
 
-    /// Take the correction `du` from `u` (residual `r`, evaluation `ev`): the
-    /// backtracking line search if asked for, else the full step, halved while it cannot
-    /// be evaluated (an inverted element; prescribed values always land in full), then
-    /// record it in the monitor. On return `u` and `r` hold the new point; `Ok(None)`: it
+    /// Take the correction `du` from `u` (residual `r`, evaluation `ev`) as the line
+    /// search setting says ([`LineSearch`]; the first correction after a snapped
+    /// prediction always in full), then record it in the monitor. On return `u` and `r` hold the new point; `Ok(None)`: it
     /// could not be evaluated (reason set).
     pub fn take_step(&mut self, du: &[f64], ev: &Eval) -> Result<Option<Eval>> {
         let measured = Monitor::measure(self.comm, du, self.r, &self.cons.is_c);
-        let (next, lambda) = if self.opts.line_search && ev.gap == 0.0 {
+        let full = std::mem::take(&mut self.full_next);
+        let (next, lambda) = if self.opts.line_search == LineSearch::On && !full {
             match self.line_search(du, ev.rn, 6)? {
                 Some(x) => x,
                 None => return Ok(None),
             }
         } else {
-            let base = self.u.to_vec();
-            let mut lambda = 1.0;
-            loop {
-                // On the iteration that imposes a prescribed increment (a moving wall's
-                // reference point, a displacement boundary condition) the prescribed
-                // values land in full; only the free unknowns' part is shortened.
-                for (i, ((x, b), d)) in self.u.iter_mut().zip(&base).zip(du).enumerate() {
-                    let s = if ev.gap > 0.0 && self.cons.is_c[i] {
-                        1.0
-                    } else {
-                        lambda
-                    };
-                    *x = b + s * d;
-                }
-                match self.evaluate()? {
-                    Some(e) => break (e, lambda),
-                    // A full step that inverts an element (a nearly incompressible body
-                    // overshooting, a thin wall folding) is shortened, not fatal: halve
-                    // it up to 5 times.
-                    None if lambda > 0.05 => lambda *= 0.5,
+            let (next, lambda) = match self.full_step(du)? {
+                Some(x) => x,
+                None => return Ok(None),
+            };
+            let auto = self.opts.line_search == LineSearch::Auto && !full;
+            if auto && next.rn > AUTO_GROWTH * ev.rn && lambda == 1.0 {
+                match self.backtrack(du, ev, next)? {
+                    Some(x) => x,
                     None => return Ok(None),
                 }
+            } else {
+                (next, lambda)
             }
         };
         self.monitor.record(measured, lambda);
         Ok(Some(next))
     }
+
+    /// The line search `auto` after a full step `full` that grew ‖r‖ past
+    /// [`AUTO_GROWTH`]: Armijo halvings from ½ (at most 5), keeping the best point found
+    /// (the full one included). `u`, `r` hold it on return.
+    fn backtrack(&mut self, du: &[f64], ev: &Eval, full: Eval) -> Result<Option<(Eval, f64)>> {
+        let base: Vec<f64> = (0..self.n()).map(|i| self.u[i] - du[i]).collect();
+        let mut best = (full, 1.0, self.u.to_vec(), self.r.to_vec());
+        let mut lambda = 0.5;
+        for _ in 0..5 {
+            for i in 0..self.n() {
+                self.u[i] = base[i] + lambda * du[i];
+            }
+            self.stats.backtracks += 1;
+            if let Some(e) = self.evaluate()? {
+                if e.rn < best.0.rn {
+                    best = (e, lambda, self.u.to_vec(), self.r.to_vec());
+                }
+                if e.rn <= (1.0 - 1e-4 * lambda) * ev.rn {
+                    return Ok(Some((e, lambda)));
+                }
+            } else {
+                self.stats.failure = None;
+                self.stats.reason.clear();
+            }
+            lambda *= 0.5;
+        }
+        self.u.copy_from_slice(&best.2);
+        self.r.copy_from_slice(&best.3);
+        Ok(Some((best.0, best.1)))
+    }
+
+    /// The full step along `du` (prescribed dofs untouched: Δu_c = 0), halved while it
+    /// cannot be evaluated (an inverted element). `Ok(None)`: it never could (reason set).
+    fn full_step(&mut self, du: &[f64]) -> Result<Option<(Eval, f64)>> {
+        let base = self.u.to_vec();
+        let mut lambda = 1.0;
+        loop {
+            for (x, (b, d)) in self.u.iter_mut().zip(base.iter().zip(du)) {
+                *x = b + lambda * d;
+            }
+            match self.evaluate()? {
+                Some(e) => return Ok(Some((e, lambda))),
+                // A full step that inverts an element (a nearly incompressible body
+                // overshooting, a thin wall folding) is shortened, not fatal: halve it up
+                // to 5 times.
+                None if lambda > 0.05 => lambda *= 0.5,
+                None => return Ok(None),
+            }
+        }
+    }
 }
+
+/// The line search `auto` backtracks only after a full step that multiplied ‖r_free‖ by
+/// more than this.
+pub const AUTO_GROWTH: f64 = 1e3;
 
 /// A linear solve that missed its tolerance but reached this relative residual is
 /// still used as the Newton correction.
 pub const ACCEPTABLE_LINEAR_RESIDUAL: f64 = 1e-6;
+
+#[cfg(test)]
+mod tests {
+    use super::super::testing::{equilibrium, options, solve, Toy};
+    use super::super::SolverKind;
+    use super::*;
+
+    const KINDS: [SolverKind; 3] = [SolverKind::Newton, SolverKind::Bfgs, SolverKind::Jfnk];
+
+    fn close(a: &[f64; 3], b: &[f64; 3], tol: f64) -> bool {
+        a.iter().zip(b).all(|(x, y)| (x - y).abs() <= tol)
+    }
+
+    /// From the converged state, the tangent predictor imposes u₀ = g with one solve
+    /// linearized at the old pose; every later residual and Jacobian is at u₀ = g
+    /// exactly, whatever the method.
+    #[test]
+    fn tangent_predictor_imposes_before_the_first_residual() {
+        for kind in KINDS {
+            let opts = options(kind);
+            let mut toy = Toy::new(1.0, 3.0, 0.5);
+            let mut u = [0.0; 3];
+            let st = solve(&opts, &mut toy, &mut u, 2.0, Start::Tangent);
+            assert!(st.converged, "{kind:?}: {}", st.reason);
+            assert_eq!(st.predictor_solves, 1, "{kind:?}");
+            assert_eq!(toy.jacobians[0][0], 0.0, "{kind:?}: the predictor at the old pose");
+            assert_eq!(toy.residuals[0][0], 0.0, "{kind:?}");
+            assert!(
+                toy.residuals[1..].iter().all(|p| p[0] == 2.0),
+                "{kind:?}: {:?}",
+                toy.residuals
+            );
+            assert!(toy.jacobians[1..].iter().all(|p| p[0] == 2.0), "{kind:?}");
+            assert!(close(&u, &equilibrium(&toy, 2.0), 1e-8), "{kind:?}: {u:?}");
+        }
+    }
+
+    /// A prediction that foresees the prescribed value is snapped to it: no predictor
+    /// solve, and nothing is evaluated at another pose.
+    #[test]
+    fn exact_prediction_is_snapped_without_a_solve() {
+        for kind in KINDS {
+            let opts = options(kind);
+            let mut toy = Toy::new(1.0, 3.0, 0.5);
+            let base = [1.0, 1.3, 1.6];
+            let mut u = [2.0 + 1e-9, 2.3, 2.6];
+            let st = solve(&opts, &mut toy, &mut u, 2.0, Start::Predicted(&base));
+            assert!(st.converged, "{kind:?}: {}", st.reason);
+            assert_eq!(st.predictor_solves, 0, "{kind:?}");
+            assert!(toy.residuals.iter().all(|p| p[0] == 2.0), "{kind:?}");
+            assert!(toy.jacobians.iter().all(|p| p[0] == 2.0), "{kind:?}");
+            assert!(close(&u, &equilibrium(&toy, 2.0), 1e-8), "{kind:?}");
+        }
+    }
+
+    /// A close prediction is corrected by the tangent predictor from the predicted
+    /// point; a wrong one (the motion turned) is dropped for the converged state.
+    #[test]
+    fn close_and_wrong_predictions() {
+        let opts = options(SolverKind::Newton);
+        let base = [1.0, 1.3, 1.6];
+        let mut toy = Toy::new(1.0, 3.0, 0.5);
+        let mut u = [1.8, 2.1, 2.4];
+        let st = solve(&opts, &mut toy, &mut u, 2.0, Start::Predicted(&base));
+        assert!(st.converged && st.predictor_solves == 1);
+        assert_eq!(toy.jacobians[0], [1.8, 2.1, 2.4], "from the prediction");
+        let mut toy = Toy::new(1.0, 3.0, 0.5);
+        let mut u = [3.0, 3.3, 3.6];
+        let st = solve(&opts, &mut toy, &mut u, 0.5, Start::Predicted(&base));
+        assert!(st.converged && st.predictor_solves == 1);
+        assert_eq!(toy.jacobians[0], base, "from the converged state");
+        assert!(close(&u, &equilibrium(&toy, 0.5), 1e-8));
+    }
+
+    #[test]
+    fn prediction_thresholds() {
+        assert_eq!(Prediction::of(0.0, 0.0), Prediction::Exact);
+        assert_eq!(Prediction::of(1e-7, 1.0), Prediction::Exact);
+        assert_eq!(Prediction::of(1e-3, 1.0), Prediction::Close);
+        assert_eq!(Prediction::of(0.5, 1.0), Prediction::Close);
+        assert_eq!(Prediction::of(0.51, 1.0), Prediction::Wrong);
+        assert_eq!(Prediction::of(1e-9, 0.0), Prediction::Wrong);
+    }
+
+    /// The line search `auto` keeps full steps unless one multiplies ‖r‖ by more than
+    /// [`AUTO_GROWTH`]: a tangent 10⁻⁵ of the true one (steps 10⁵ too long) backtracks,
+    /// and the point kept has a smaller residual than the full step's.
+    #[test]
+    fn auto_line_search_backtracks_only_on_growth() {
+        let first_step = |ls: LineSearch, jscale: f64| {
+            let mut opts = options(SolverKind::Newton);
+            opts.line_search = ls;
+            opts.max_iterations = 2;
+            let mut toy = Toy::new(1.0, 0.0, 1.0);
+            toy.jscale = jscale;
+            let mut u = [0.0; 3];
+            let st = solve(&opts, &mut toy, &mut u, 0.0, Start::Tangent);
+            (st.residual_history[1], st.backtracks)
+        };
+        let (full, none) = first_step(LineSearch::Off, 1e-5);
+        let (auto, backtracks) = first_step(LineSearch::Auto, 1e-5);
+        assert_eq!(none, 0);
+        assert!(full > AUTO_GROWTH, "{full}");
+        assert!(backtracks >= 5, "{backtracks}");
+        assert!(auto < full / 10.0, "{auto} against {full}");
+        // With the true tangent the full step is kept.
+        let (_, backtracks) = first_step(LineSearch::Auto, 1.0);
+        assert_eq!(backtracks, 0);
+    }
+
+}

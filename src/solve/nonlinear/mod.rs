@@ -11,13 +11,15 @@ pub mod context;
 pub mod jfnk;
 pub mod newton;
 pub mod precond;
+#[cfg(test)]
+pub mod testing;
 
 use crate::linalg::gmres::GmresOptions;
 use crate::linalg::matrix::DistMatrix;
 use crate::linalg::PcKind;
 use crate::parallel::Comm;
 use crate::Result;
-pub use context::{Next, NonlinearSolver, Solver, SolverContext};
+pub use context::{Next, NonlinearSolver, Prediction, Solver, SolverContext, Start};
 pub use precond::Preconditioning;
 
 /// The three nonlinear solvers (DESIGN.md, "Nonlinear solvers").
@@ -72,6 +74,32 @@ pub enum FdRule {
     WalkerPernice,
 }
 
+/// When Newton and JFNK backtrack along a correction (Dennis & Schnabel §6.3).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum LineSearch {
+    /// Full steps always.
+    Off,
+    /// Armijo backtracking on every correction.
+    On,
+    /// Full steps, unless the full step multiplies ‖r_free‖ by more than
+    /// [`context::AUTO_GROWTH`]: then Armijo backtracking from there. A full step that
+    /// overshoots and then converges (large rotations, contact changes) is kept; one that
+    /// throws the iterate far away is not.
+    #[default]
+    Auto,
+}
+
+impl LineSearch {
+    pub fn name(self) -> &'static str {
+        match self {
+            LineSearch::Off => "false",
+            LineSearch::On => "true",
+            LineSearch::Auto => "auto",
+        }
+    }
+}
+
 /// Settings of a nonlinear solve (defaults documented in the deck, `[solver]`).
 #[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub struct NonlinearOptions {
@@ -103,8 +131,8 @@ pub struct NonlinearOptions {
     /// A characteristic element length h (mean over the model) for the FD step; set
     /// from the model at the start of a run.
     pub char_length: f64,
-    /// Backtracking line search on ‖r_free‖ (all solvers).
-    pub line_search: bool,
+    /// The backtracking line search on ‖r_free‖ of Newton and JFNK (BFGS always searches).
+    pub line_search: LineSearch,
     /// Write the run's first Newton linear system here (`alfe run --export-system`:
     /// [`crate::linalg::export`]).
     pub export_system: Option<std::path::PathBuf>,
@@ -198,6 +226,12 @@ pub struct SolveStats {
     pub coarse: Option<crate::linalg::CoarseStats>,
     /// Linear-operator applications that were finite-difference residuals (JFNK).
     pub fd_products: usize,
+    /// Tangent predictor solves (counted in `iterations` too).
+    pub predictor_solves: usize,
+    /// Line-search trials beyond the full step.
+    pub backtracks: usize,
+    /// BFGS reforms (stiffness reassembled and refactored).
+    pub reforms: usize,
 }
 
 impl SolveStats {

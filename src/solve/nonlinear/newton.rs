@@ -3,9 +3,8 @@
 //!
 //! Convergence: residual, increment and energy tests together ([`super::common::Monitor`]);
 //! a zero residual at the start of a step needs no correction.
-//! Prescribed dofs: each linear solve imposes Δu_c = g − u_c exactly and moves the
-//! coupling −K_fc (g − u_c) to the right-hand side, so a large prescribed increment is
-//! linearised consistently instead of being forced into the first residual.
+//! Prescribed dofs hold their values before the first residual (the solver context's
+//! predictor), so every correction has Δu_c = 0.
 
 use super::common::Eval;
 use super::context::{Next, NonlinearSolver, SolverContext};
@@ -22,7 +21,6 @@ static EXPORTED: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::
 pub struct Newton {
     du: Vec<f64>,
     rhs: Vec<f64>,
-    kd: Vec<f64>,
 }
 
 impl Newton {
@@ -31,26 +29,21 @@ impl Newton {
         Self {
             du: vec![0.0; n],
             rhs: vec![0.0; n],
-            kd: vec![0.0; n],
         }
     }
 }
 
 impl NonlinearSolver for Newton {
     fn iterate(&mut self, cx: &mut SolverContext, ev: &Eval) -> Result<Next> {
-        // Jacobian and the linear solve K Δu = −r with Δu_c = g − u_c.
+        // Jacobian and the linear solve K Δu = −r with Δu_c = 0.
         let t1 = Instant::now();
         if !cx.jacobian()? {
             return Ok(Next::Stop);
         }
-        cx.coupling(ev, &mut self.du, &mut self.kd);
         for i in 0..cx.n() {
-            self.rhs[i] = if cx.cons.is_c[i] {
-                self.du[i]
-            } else {
-                -cx.r[i] - self.kd[i]
-            };
+            self.rhs[i] = if cx.cons.is_c[i] { 0.0 } else { -cx.r[i] };
         }
+        self.du.iter_mut().for_each(|x| *x = 0.0);
         cx.constrain();
         cx.stats.seconds_assembly += t1.elapsed().as_secs_f64();
         let export = export_system(cx, &self.rhs)?;

@@ -19,7 +19,9 @@ use crate::model::dynamics::MassMatrix;
 use crate::model::Model;
 use crate::parallel::Comm;
 use crate::solve::control::StepControl;
-use crate::solve::nonlinear::{NonlinearOptions, NonlinearProblem, SolveStats, Solver};
+use crate::solve::nonlinear::{
+    NonlinearOptions, NonlinearProblem, SolveStats, Solver, SolverKind, Start,
+};
 use crate::solve::stepping::{model_solver, Attempt, Flow, Resume, RunTotals, StepRecord};
 use crate::solve::{Analysis, MassKind, Scheme};
 use crate::{Error, Result};
@@ -283,8 +285,9 @@ impl<'a> Implicit<'a> {
             ma: vec![0.0; n],
             fi: vec![0.0; n],
         };
+        let start = Start::Predicted(&state.u);
         self.solver
-            .solve(self.comm, &mut prob, trial, &mut self.r, &g1)
+            .solve(self.comm, &mut prob, trial, &mut self.r, &g1, start)
     }
 
     /// A failed attempt from `t_done` to `t1`: diagnosed, forgotten, the step cut.
@@ -398,8 +401,16 @@ impl<'a> Implicit<'a> {
                 mass: &self.mass,
                 rhs: &rhs,
             };
-            self.solver
-                .solve(comm, &mut prob, &mut state.a, &mut self.r, &a_pres)?
+            // A linear problem: Newton whatever the run's method.
+            self.solver.solve_with(
+                SolverKind::Newton,
+                comm,
+                &mut prob,
+                &mut state.a,
+                &mut self.r,
+                &a_pres,
+                Start::Tangent,
+            )?
         };
         self.tot.add(&st0);
         self.solver.pc.invalidate();
