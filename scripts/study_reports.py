@@ -280,7 +280,7 @@ def indent(runs, out, ctx):
         print("no chart: matplotlib is missing")
         return
     fig, ax = plt.subplots(figsize=(7, 4.5))
-    styles = {"newton": "-", "bfgs": "--", "jfnk": ":"}
+    styles = {"newton": "-", "bfgs": "--", "jfnk": ":", "auto": "-."}
     for r in recs:
         xs, fs = r["curve"]
         ax.plot(xs, fs, styles.get(r["solver"], "-"),

@@ -180,6 +180,7 @@ enum SolverArg {
     Newton,
     Bfgs,
     Jfnk,
+    Auto,
 }
 
 #[derive(ValueEnum, Clone, Copy, Debug)]
@@ -194,6 +195,7 @@ impl SolverArg {
             SolverArg::Newton => SolverKind::Newton,
             SolverArg::Bfgs => SolverKind::Bfgs,
             SolverArg::Jfnk => SolverKind::Jfnk,
+            SolverArg::Auto => SolverKind::Auto,
         }
     }
 }

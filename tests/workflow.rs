@@ -215,6 +215,8 @@ fn iterations_csv_has_every_attempt() {
         .lines()
         .skip(1)
         .map(|l| {
+            let (l, method) = l.rsplit_once(',').unwrap();
+            assert_eq!(method, "newton", "{l}");
             let (head, outcome) = l.split_at(l.match_indices(',').nth(5).unwrap().0);
             let mut v: Vec<String> = head.split(',').map(String::from).collect();
             v.push(outcome[1..].to_string());

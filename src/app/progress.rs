@@ -65,6 +65,19 @@ impl Progress {
 
     /// A static increment.
     pub fn static_step(&mut self, rec: &StepRecord, solver: &str, sets: &[String]) {
+        // `auto`: every change of method, then the method that converged.
+        let attempts = rec.failed.iter().map(|a| &a.stats).chain([&rec.stats]);
+        for s in attempts.flat_map(|s| &s.switches) {
+            let line = format!(
+                "step {:>4}  solver {} → {}: {}",
+                rec.step, s.from, s.to, s.reason
+            );
+            self.log.line(&line);
+        }
+        let solver = match rec.stats.method {
+            m if solver == "auto" && !m.is_empty() => m,
+            _ => solver,
+        };
         let retry = if rec.retries > 0 {
             format!("  retries {}", rec.retries)
         } else {

@@ -15,7 +15,7 @@ use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
 /// Bumped when the layout changes: an older file is refused, not misread.
-pub const FORMAT: u32 = 2;
+pub const FORMAT: u32 = 3;
 
 #[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct Checkpoint {
@@ -171,6 +171,7 @@ mod tests {
                 },
                 last_increment: None,
                 dynamic: None,
+                auto: None,
             },
         }
     }

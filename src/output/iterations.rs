@@ -6,7 +6,9 @@
 //! Columns: `step` (the step being attempted), `attempt` (1, 2, … within the step),
 //! `t_start`, `t_end` (the attempt's interval), `iteration` (0 is the residual before
 //! the first correction), `relative_residual` (‖r_free‖ / force scale), `outcome` (on an
-//! attempt's last row: `converged`, or why it failed).
+//! attempt's last row: `converged`, or why it failed; with `solver = "auto"`, on a
+//! method's last row within an attempt, `switch to <method>: <why>`), `method` (the
+//! method, or the fallback variant, that made the row).
 
 use crate::solve::stepping::Attempt;
 use std::fs::File;
@@ -27,7 +29,7 @@ impl IterationLog {
             .and_then(|mut f| {
                 writeln!(
                     f,
-                    "step,attempt,t_start,t_end,iteration,relative_residual,outcome"
+                    "step,attempt,t_start,t_end,iteration,relative_residual,outcome,method"
                 )
                 .ok()
                 .map(|_| f)
@@ -53,9 +55,14 @@ impl IterationLog {
         };
         for (k, a) in attempts.iter().enumerate() {
             let last_ok = converged && k + 1 == attempts.len();
-            let h = &a.stats.residual_history;
+            let (h, sw) = (&a.stats.residual_history, &a.stats.switches);
             for (i, r) in h.iter().enumerate() {
-                let outcome = if i + 1 < h.len() {
+                // The switch whose method made this row, if it is not the last method.
+                let from = sw.iter().find(|s| i < s.at);
+                let method = from.map_or(a.stats.method, |s| s.from);
+                let outcome = if let Some(s) = from.filter(|s| i + 1 == s.at) {
+                    csv_text(&format!("switch to {}: {}", s.to, s.reason))
+                } else if i + 1 < h.len() {
                     String::new()
                 } else if last_ok {
                     "converged".into()
@@ -64,7 +71,7 @@ impl IterationLog {
                 };
                 writeln!(
                     f,
-                    "{step},{},{:.15e},{:.15e},{i},{r:.6e},{outcome}",
+                    "{step},{},{:.15e},{:.15e},{i},{r:.6e},{outcome},{method}",
                     k + 1,
                     a.t_start,
                     a.t_end

@@ -77,6 +77,11 @@ pub struct SolverCounts {
     pub line_search_backtracks: usize,
     /// BFGS stiffness reforms.
     pub bfgs_reforms: usize,
+    /// `auto`'s changes of method within increments, in all and by "from → to".
+    pub solver_switches: usize,
+    pub switches: std::collections::BTreeMap<String, usize>,
+    /// Converged increments by the method (variant) that converged them.
+    pub increments_by_method: std::collections::BTreeMap<String, usize>,
 }
 
 /// One analysis step's share of [`RunTotals`].
@@ -115,6 +120,21 @@ impl RunTotals {
         self.counts.predictor_solves += s.predictor_solves;
         self.counts.line_search_backtracks += s.backtracks;
         self.counts.bfgs_reforms += s.reforms;
+        self.counts.solver_switches += s.switches.len();
+        for w in &s.switches {
+            *self
+                .counts
+                .switches
+                .entry(format!("{} → {}", w.from, w.to))
+                .or_default() += 1;
+        }
+        if s.converged && !s.method.is_empty() {
+            *self
+                .counts
+                .increments_by_method
+                .entry(s.method.to_string())
+                .or_default() += 1;
+        }
         self.seconds_assembly += s.seconds_assembly;
         self.seconds_linear += s.seconds_linear;
         self.seconds_pc_setup += s.seconds_pc_setup;
@@ -133,6 +153,8 @@ pub struct Resume {
     pub control: ControlState,
     pub last_increment: Option<(Vec<f64>, f64)>,
     pub dynamic: Option<DynResume>,
+    /// What `solver = "auto"` had learned.
+    pub auto: Option<crate::solve::nonlinear::auto::AutoState>,
 }
 
 /// What an observer wants after a step: go on, or stop here (`alfe run --stop-after`:

@@ -7,9 +7,7 @@ use crate::linalg::matrix::DistMatrix;
 use crate::model::Model;
 use crate::parallel::Comm;
 use crate::solve::control::StepControl;
-use crate::solve::nonlinear::{
-    NonlinearOptions, NonlinearProblem, Preconditioning, Solver, Start,
-};
+use crate::solve::nonlinear::{NonlinearOptions, NonlinearProblem, Preconditioning, Solver, Start};
 pub use crate::solve::record::{Attempt, Flow, Resume, RunTotals, StageTotals, StepRecord};
 use crate::solve::{Analysis, Predictor};
 use crate::Result;
@@ -41,7 +39,11 @@ pub fn model_solver<'o>(comm: &dyn Comm, model: &Model, opts: &'o NonlinearOptio
     if opts.rigid_body_modes || opts.preconditioner.wants_points() || opts.export_system.is_some() {
         pc = pc.with_points(model.node_points(), opts.rigid_body_modes);
     }
-    Solver::new(opts, k, pc)
+    let mut solver = Solver::new(opts, k, pc);
+    let mut owned = [model.n_owned_dofs() as f64];
+    comm.allreduce_max(&mut owned);
+    solver.auto = crate::solve::nonlinear::auto::AutoState::new(owned[0] as usize);
+    solver
 }
 
 /// Called with every converged step, its solution, the model (output, progress) and
@@ -68,6 +70,9 @@ pub fn run_static(
     u.resize(n, 0.0);
     let mut r = vec![0.0; n];
     let mut solver = model_solver(comm, model, opts);
+    if let Some(a) = resume.and_then(|r| r.auto.clone()) {
+        solver.auto = a;
+    }
     let mut tot = RunTotals::default();
     let mut t0 = Instant::now();
     // The last converged increment and its step, for the predictor.
@@ -152,6 +157,7 @@ pub fn run_static(
             control: ctl.state(),
             last_increment: last.clone(),
             dynamic: None,
+            auto: Some(solver.auto.clone()),
         };
         if on_step(&rec, u, model, &here)? == Flow::Stop {
             tot.stopped = true;

@@ -640,7 +640,11 @@ fn write_controls(out: &mut String, scene: &Scene) {
     // defaults.
     let d = crate::scene::deck::SolverDeck::default();
     if s.line_search != crate::solve::nonlinear::LineSearch::default() {
-        let _ = writeln!(out, "$alfe line_search = {}", line_search_text(s.line_search));
+        let _ = writeln!(
+            out,
+            "$alfe line_search = {}",
+            line_search_text(s.line_search)
+        );
     }
     for (key, v, dv) in [
         ("residual_rtol", s.residual_rtol, d.residual_rtol),

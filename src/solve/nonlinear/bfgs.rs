@@ -48,8 +48,8 @@
 //! directions.
 
 use super::common::Eval;
-use super::Failure;
 use super::context::{Next, NonlinearSolver, SolverContext};
+use super::Failure;
 use crate::parallel::Comm;
 use crate::Result;
 use std::time::Instant;

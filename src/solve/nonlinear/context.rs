@@ -5,9 +5,11 @@
 //! Jacobian assembly, the preconditioned linear solve and the line search are written
 //! once here; a method ([`NonlinearSolver`]: Newton, BFGS, JFNK) provides only its step.
 
+use super::auto::{chain, merge, AutoState, Switch};
 use super::common::{Constraints, Eval, Monitor, Verdict};
 use super::{
     Failure, LineSearch, NonlinearOptions, NonlinearProblem, Preconditioning, SolveStats,
+    SolverKind,
 };
 use crate::linalg::gmres::{gmres, GmresStats};
 use crate::linalg::matrix::DistMatrix;
@@ -22,11 +24,16 @@ pub struct Solver<'o> {
     pub opts: &'o NonlinearOptions,
     pub k: DistMatrix,
     pub pc: Preconditioning,
+    /// What `solver = "auto"` has learned (`auto.rs`).
+    pub auto: AutoState,
 }
 
 impl<'o> Solver<'o> {
     pub fn new(opts: &'o NonlinearOptions, k: DistMatrix, pc: Preconditioning) -> Self {
-        Self { opts, k, pc }
+        // The caller that knows the communicator sets the factor weight from the largest
+        // rank's share (`stepping::model_solver`): every rank must choose alike.
+        let auto = AutoState::new(0);
+        Self { opts, k, pc, auto }
     }
 
     /// Solve one load step with the method of `opts.kind`: r(u) = 0 on the free dofs
@@ -43,7 +50,51 @@ impl<'o> Solver<'o> {
         prescribed: &[(usize, f64)],
         start: Start,
     ) -> Result<SolveStats> {
+        if self.opts.kind == SolverKind::Auto {
+            return self.solve_auto(comm, problem, u, r, prescribed, start);
+        }
         self.solve_with(self.opts.kind, comm, problem, u, r, prescribed, start)
+    }
+
+    /// `auto` (`auto.rs`): the chain of the method that has been cheapest, each link
+    /// from the increment's start point, until one converges.
+    fn solve_auto(
+        &mut self,
+        comm: &dyn Comm,
+        problem: &mut dyn NonlinearProblem,
+        u: &mut [f64],
+        r: &mut [f64],
+        prescribed: &[(usize, f64)],
+        start: Start,
+    ) -> Result<SolveStats> {
+        let first = self.auto.choose();
+        let links = chain(first);
+        let u0 = u.to_vec();
+        let mut total = SolveStats::default();
+        for (i, link) in links.iter().enumerate() {
+            if i > 0 {
+                u.copy_from_slice(&u0);
+                self.pc.invalidate();
+            }
+            let opts = link.options(self.opts);
+            let st = self.solve_opts(&opts, comm, problem, u, r, prescribed, start)?;
+            merge(&mut total, st);
+            total.method = link.name();
+            if total.converged {
+                break;
+            }
+            if let Some(next) = links.get(i + 1) {
+                total.switches.push(Switch {
+                    from: link.name(),
+                    to: next.name(),
+                    reason: total.reason.clone(),
+                    at: total.residual_history.len(),
+                });
+            }
+        }
+        let work = self.auto.work_of(&total);
+        self.auto.record(first, work);
+        Ok(total)
     }
 
     /// [`Solver::solve`] with the method `kind` instead of the options' one.
@@ -58,10 +109,31 @@ impl<'o> Solver<'o> {
         prescribed: &[(usize, f64)],
         start: Start,
     ) -> Result<SolveStats> {
-        let mut method = kind.method(u.len(), self.opts);
-        let mut cx = SolverContext::new(comm, self, problem, u, r, prescribed);
+        let opts = NonlinearOptions {
+            kind,
+            ..self.opts.clone()
+        };
+        self.solve_opts(&opts, comm, problem, u, r, prescribed, start)
+    }
+
+    /// One solve with the options `opts` (their method) on this solver's storage.
+    #[allow(clippy::too_many_arguments)]
+    fn solve_opts(
+        &mut self,
+        opts: &NonlinearOptions,
+        comm: &dyn Comm,
+        problem: &mut dyn NonlinearProblem,
+        u: &mut [f64],
+        r: &mut [f64],
+        prescribed: &[(usize, f64)],
+        start: Start,
+    ) -> Result<SolveStats> {
+        let mut method = opts.kind.method(u.len(), opts);
+        let mut cx = SolverContext::new(comm, self, opts, problem, u, r, prescribed);
         cx.run(method.as_mut(), start)?;
-        Ok(cx.stats)
+        let mut stats = cx.stats;
+        stats.method = opts.kind.name();
+        Ok(stats)
     }
 }
 
@@ -169,6 +241,7 @@ impl<'a> SolverContext<'a> {
     pub fn new(
         comm: &'a dyn Comm,
         solver: &'a mut Solver<'_>,
+        opts: &'a NonlinearOptions,
         problem: &'a mut dyn NonlinearProblem,
         u: &'a mut [f64],
         r: &'a mut [f64],
@@ -183,7 +256,7 @@ impl<'a> SolverContext<'a> {
             cons,
             k: &mut solver.k,
             pc: &mut solver.pc,
-            opts: solver.opts,
+            opts,
             monitor: Monitor::default(),
             stats: SolveStats::default(),
             scale: 0.0,
@@ -227,7 +300,7 @@ impl<'a> SolverContext<'a> {
     /// predictor failed (reason set).
     fn predict(&mut self, start: Start) -> Result<bool> {
         let gap = match start {
-            Start::Tangent => self.misses(&self.u.to_vec()).0,
+            Start::Tangent => self.misses(self.u).0,
             Start::Predicted(base) => {
                 let (gap, inc) = self.misses(base);
                 match Prediction::of(gap, inc) {
@@ -637,7 +710,10 @@ mod tests {
             let st = solve(&opts, &mut toy, &mut u, 2.0, Start::Tangent);
             assert!(st.converged, "{kind:?}: {}", st.reason);
             assert_eq!(st.predictor_solves, 1, "{kind:?}");
-            assert_eq!(toy.jacobians[0][0], 0.0, "{kind:?}: the predictor at the old pose");
+            assert_eq!(
+                toy.jacobians[0][0], 0.0,
+                "{kind:?}: the predictor at the old pose"
+            );
             assert_eq!(toy.residuals[0][0], 0.0, "{kind:?}");
             assert!(
                 toy.residuals[1..].iter().all(|p| p[0] == 2.0),
@@ -721,5 +797,4 @@ mod tests {
         let (_, backtracks) = first_step(LineSearch::Auto, 1.0);
         assert_eq!(backtracks, 0);
     }
-
 }

@@ -355,4 +355,3 @@ impl NonlinearSolver for Jfnk {
         Ok(Next::Moved(next))
     }
 }
-

@@ -5,6 +5,7 @@
 //! (PETSc's SNES: `context.rs`) driving the method of [`SolverKind`], a
 //! [`NonlinearSolver`] that provides only its step (`newton.rs`, `bfgs.rs`, `jfnk.rs`).
 
+pub mod auto;
 pub mod bfgs;
 pub mod common;
 pub mod context;
@@ -33,6 +34,8 @@ pub enum SolverKind {
     Bfgs,
     /// Jacobian-free Newton–Krylov with a lagged block-Jacobi preconditioner.
     Jfnk,
+    /// Per increment the cheapest so far, with fallbacks (`auto.rs`).
+    Auto,
 }
 
 impl SolverKind {
@@ -41,6 +44,7 @@ impl SolverKind {
             SolverKind::Newton => "newton",
             SolverKind::Bfgs => "bfgs",
             SolverKind::Jfnk => "jfnk",
+            SolverKind::Auto => "auto",
         }
     }
     pub fn parse(s: &str) -> Option<Self> {
@@ -48,14 +52,16 @@ impl SolverKind {
             "newton" => Some(Self::Newton),
             "bfgs" => Some(Self::Bfgs),
             "jfnk" => Some(Self::Jfnk),
+            "auto" => Some(Self::Auto),
             _ => None,
         }
     }
 
-    /// The method of this kind for a solve of `n` owned dofs.
+    /// The method of this kind for a solve of `n` owned dofs (`auto` is a choice among
+    /// them, made by [`Solver::solve`]; here it is Newton).
     pub fn method(self, n: usize, opts: &NonlinearOptions) -> Box<dyn NonlinearSolver> {
         match self {
-            SolverKind::Newton => Box::new(newton::Newton::new(n)),
+            SolverKind::Newton | SolverKind::Auto => Box::new(newton::Newton::new(n)),
             SolverKind::Bfgs => Box::new(bfgs::Bfgs::new(n, opts.bfgs_reform)),
             SolverKind::Jfnk => Box::new(jfnk::Jfnk::new(n)),
         }
@@ -232,6 +238,10 @@ pub struct SolveStats {
     pub backtracks: usize,
     /// BFGS reforms (stiffness reassembled and refactored).
     pub reforms: usize,
+    /// The method (variant) of the last attempt: the one that converged, if any.
+    pub method: &'static str,
+    /// `auto`'s changes of method within the increment.
+    pub switches: Vec<auto::Switch>,
 }
 
 impl SolveStats {

@@ -152,6 +152,9 @@ pub fn run_implicit(
         Some((x, d)) => {
             // A restart: the caller set u and the model's state; the rest is here.
             ctl.resume(&x.control);
+            if let Some(a) = &x.auto {
+                run.solver.auto = a.clone();
+            }
             state.v = d.v.clone();
             state.a = d.a.clone();
             (d.energy.clone(), d.r_old.clone())
@@ -198,6 +201,7 @@ pub fn run_implicit(
                 r_old: r_old.clone(),
                 energy: energy.clone(),
             }),
+            auto: Some(run.solver.auto.clone()),
         };
         if on_step(&rec, state, model, Some(&here))? == Flow::Stop {
             run.tot.stopped = true;
