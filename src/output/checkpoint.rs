@@ -14,8 +14,10 @@ use crate::{Error, Result};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
-/// Bumped when the layout changes: an older file is refused, not misread.
-pub const FORMAT: u32 = 2;
+/// Bumped when the layout changes: an older file is refused, not misread. 3: penalty
+/// contact carries its elastic slip (not its tangential force), and pairs keep their
+/// contact, stick and stick softening.
+pub const FORMAT: u32 = 3;
 
 #[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct Checkpoint {
