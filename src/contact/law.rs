@@ -1,8 +1,8 @@
-//! Pointwise contact laws of one tracked node in the local frame [n, t1, t2] of the
-//! surface point it projects to: the augmented-Lagrangian residual of the paper (§2.1,
-//! DESIGN.md "Contact: the formulation") and the penalty baseline. Gaps and multipliers
-//! are lengths; the caller scales by κ. Derivatives are the generalized (semi-smooth)
-//! Jacobian used by Newton and by the preconditioners.
+//! The pointwise augmented-Lagrangian contact law of one tracked node in the local frame
+//! [n, t1, t2] of the surface point it projects to: the residual of the paper (§2.1,
+//! DESIGN.md "Contact: the formulation"); the penalty law is [`super::penalty`]. Gaps
+//! and multipliers are lengths; the caller scales by κ. Derivatives are the generalized
+//! (semi-smooth) Jacobian used by Newton and by the preconditioners.
 
 // Index loops over 3×3 frames read like the formulas.
 #![allow(clippy::needless_range_loop)]
@@ -193,63 +193,6 @@ pub fn alm_law(g: [f64; 3], lam: [f64; 3], law: &AlmLaw, decision: Decision) -> 
     p
 }
 
-/// Penalty force of one node in the local frame with its derivative.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct PenaltyPoint {
-    /// (f_N ≥ 0 along the outward normal, f_T1, f_T2): the force on the node.
-    pub f: [f64; 3],
-    /// ∂f/∂g.
-    pub df_dg: [[f64; 3]; 3],
-    pub active: bool,
-    pub sticking: bool,
-}
-
-/// f_N = k_N max(−g_N, 0) (active for g_N ≤ 0); tangentially an elastic stick spring k_T on the slip over the
-/// step added to the force carried from the last step, returned onto the Coulomb cone
-/// ‖f_T‖ ≤ μ f_N (regularized Coulomb, Wriggers, Computational Contact Mechanics §5.2).
-pub fn penalty(g: [f64; 3], ft_old: [f64; 2], kn: f64, kt: f64, mu: f64) -> PenaltyPoint {
-    let mut p = PenaltyPoint {
-        f: [0.0; 3],
-        df_dg: [[0.0; 3]; 3],
-        active: false,
-        sticking: false,
-    };
-    // A node exactly on the wall is active (with zero force): its stiffness k_N holds a
-    // body that rests on the wall before any penetration (as ALM's tie rule does).
-    if g[0] > 0.0 {
-        return p;
-    }
-    p.active = true;
-    let fnrm = -kn * g[0];
-    p.f[0] = fnrm;
-    p.df_dg[0][0] = -kn;
-    let cap = mu * fnrm;
-    if cap <= 0.0 {
-        return p;
-    }
-    let tr = [ft_old[0] - kt * g[1], ft_old[1] - kt * g[2]];
-    let tn = (tr[0] * tr[0] + tr[1] * tr[1]).sqrt();
-    if tn <= cap {
-        p.f[1] = tr[0];
-        p.f[2] = tr[1];
-        p.df_dg[1][1] = -kt;
-        p.df_dg[2][2] = -kt;
-        p.sticking = true;
-    } else {
-        let th = [tr[0] / tn, tr[1] / tn];
-        for i in 0..2 {
-            p.f[1 + i] = cap * th[i];
-            // d(cap t̂)/dg_T = (cap/‖tr‖)(I − t̂ t̂ᵀ)(−k_T); d/dg_N = μ (−k_N) t̂.
-            for j in 0..2 {
-                let proj = if i == j { 1.0 } else { 0.0 } - th[i] * th[j];
-                p.df_dg[1 + i][1 + j] = -kt * cap / tn * proj;
-            }
-            p.df_dg[1 + i][0] = -mu * kn * th[i];
-        }
-    }
-    p
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -406,33 +349,5 @@ mod tests {
         assert!(alm([0.0, 0.1, 0.0], [2.0, 1.0, 0.0], 0.5).h[1].abs() > 0.05);
         // A penetrating node is not a solution whatever λ_N.
         assert!(alm([-0.1, 0.0, 0.0], [3.0, 0.0, 0.0], 0.0).h[0] < 0.0);
-    }
-
-    #[test]
-    fn penalty_force_and_derivatives() {
-        let (kn, kt, mu) = (100.0, 50.0, 0.3);
-        assert!(!penalty([0.1, 0.0, 0.0], [0.0; 2], kn, kt, mu).active);
-        let st = penalty([-0.01, 0.001, 0.0], [0.0; 2], kn, kt, mu);
-        assert!((st.f[0] - 1.0).abs() < 1e-12 && st.sticking);
-        assert!((st.f[1] + 0.05).abs() < 1e-12);
-        let sl = penalty([-0.01, 0.1, 0.0], [0.0; 2], kn, kt, mu);
-        assert!(!sl.sticking && (sl.f[1] + 0.3).abs() < 1e-12);
-        for (g, fo) in [
-            ([-0.01, 0.001, -0.002], [0.05, 0.0]),
-            ([-0.01, 0.1, -0.05], [0.01, 0.02]),
-        ] {
-            let p = penalty(g, fo, kn, kt, mu);
-            for j in 0..3 {
-                let e = 1e-8;
-                let (mut gp, mut gm) = (g, g);
-                gp[j] += e;
-                gm[j] -= e;
-                let (fp, fm) = (penalty(gp, fo, kn, kt, mu).f, penalty(gm, fo, kn, kt, mu).f);
-                for i in 0..3 {
-                    let d = (fp[i] - fm[i]) / (2.0 * e);
-                    assert!((d - p.df_dg[i][j]).abs() < 1e-5 * kn, "{i}{j}: {d} {:?}", p);
-                }
-            }
-        }
     }
 }

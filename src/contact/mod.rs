@@ -7,6 +7,7 @@ pub mod law;
 pub mod mortar;
 pub mod motion;
 pub mod pair;
+pub mod penalty;
 pub mod search;
 pub mod shape;
 pub mod vec3;

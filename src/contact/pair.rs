@@ -8,7 +8,8 @@
 //! mortar weights ([`super::mortar`]) spread the node over every reference face its
 //! dual shape function overlaps.
 //!
-//! The gaps handed to the contact law (the walls' [`super::law`], unchanged) are
+//! The gaps handed to the contact law (the walls' [`super::law`] or
+//! [`super::penalty`], unchanged) are
 //! g = (n · (d − c_N), t1 · (d − c_T), t2 · (d − c_T)): for contact c_N = 0 and c_T = d at
 //! the start of the step (the slip over the step); for a tied pair c_N = c_T = d₀ (the
 //! initial offset, so a tie holds the parts where they are). The force on the node is
@@ -20,7 +21,8 @@
 // Index loops over 3×3 frames read like the formulas.
 #![allow(clippy::needless_range_loop)]
 
-use super::law::{alm_law, penalty, AlmLaw, Branch, Decision, Tangential};
+use super::law::{alm_law, AlmLaw, Branch, Decision, Tangential};
+use super::penalty::{penalty, PenaltyLaw};
 use super::vec3::{cross, dot, norm};
 
 type M3 = [[f64; 3]; 3];
@@ -175,9 +177,9 @@ pub fn project_on_face(x: [f64; 3], xa: &[[f64; 3]]) -> Option<([f64; 2], f64)> 
 pub enum PairLaw {
     /// The paper's augmented Lagrangian (multipliers λ, scale κ).
     Alm { law: AlmLaw, kappa: f64 },
-    /// Penalty normal stiffness and regularized Coulomb (`ft_old`: the tangential
-    /// force carried from the last step, global).
-    Penalty { kp: f64, mu: f64, ft_old: [f64; 3] },
+    /// Penalty normal stiffness and the elastic-slip Coulomb law ([`super::penalty`];
+    /// `e_old`: the elastic slip carried from the last step, global).
+    Penalty { law: PenaltyLaw, e_old: [f64; 3] },
     /// Bonded in all directions: h = g with multipliers.
     TiedAlm { kappa: f64 },
     /// Bonded by a penalty spring f = −k_p g.
@@ -206,8 +208,8 @@ pub struct PairEval {
     pub sticking: bool,
     pub branch: Branch,
     pub cone_excess: f64,
-    /// Penalty: the tangential force to carry to the next step (global).
-    pub ft_new: [f64; 3],
+    /// Penalty: the elastic slip to carry to the next step (global).
+    pub elastic_slip: [f64; 3],
     /// d = x_s − x_m now.
     pub d: [f64; 3],
     /// The frame [n, t1, t2] now (rows).
@@ -291,7 +293,7 @@ struct Local {
     sticking: bool,
     branch: Branch,
     cone_excess: f64,
-    ft_new: [f64; 3],
+    elastic_slip: [f64; 3],
 }
 
 fn local_law(
@@ -310,7 +312,7 @@ fn local_law(
     let mut k_ll = [[0.0; 3]; 3];
     let (mut active, mut sticking, mut branch, mut cone_excess) =
         (true, true, Branch::default(), f64::NEG_INFINITY);
-    let mut ft_new = [0.0; 3];
+    let mut elastic_slip = [0.0; 3];
     match *law {
         PairLaw::Alm { law, kappa } => {
             // A closed pair that has carried no force yet (the first iteration of its
@@ -350,14 +352,15 @@ fn local_law(
                 k_ll[i][i] = -kappa * JACOBIAN_REG;
             }
         }
-        PairLaw::Penalty { kp, mu, ft_old } => {
-            let fo = [dot(t1, ft_old), dot(t2, ft_old)];
-            let p = penalty(g, fo, kp, kp, mu);
+        PairLaw::Penalty { law, e_old } => {
+            let eo = [dot(t1, e_old), dot(t2, e_old)];
+            let p = penalty(g, eo, &law);
             (active, sticking) = (p.active, p.sticking);
             fl = p.f;
             dfdg = p.df_dg;
+            let e = p.elastic_slip;
             for c in 0..3 {
-                ft_new[c] = t1[c] * fl[1] + t2[c] * fl[2];
+                elastic_slip[c] = t1[c] * e[0] + t2[c] * e[1];
             }
         }
         PairLaw::TiedPenalty { kp } => {
@@ -378,7 +381,7 @@ fn local_law(
         sticking,
         branch,
         cone_excess,
-        ft_new,
+        elastic_slip,
     }
 }
 
@@ -430,16 +433,16 @@ fn jacobian(
             })
         });
         // ∂f/∂x_q = Σ_k ∂P_k fl_k + P ∂fl/∂x_q, ∂fl/∂x_q = ∂fl/∂g ∂g/∂x_q (and for
-        // penalty, the carried force's projection on the turning tangents: ∂f_T/∂f_o =
-        // −(∂f_T/∂g_T)/k_T, both in stick and in slip).
+        // penalty, the carried elastic slip's projection on the turning tangents: the
+        // trial slip is e_o + g_T, so ∂f_T/∂e_o = ∂f_T/∂g_T in stick and in slip).
         let mut dfl: M3 = mm(&dfdg, &dg);
-        if let PairLaw::Penalty { kp, ft_old, .. } = *law {
+        if let PairLaw::Penalty { e_old, .. } = *law {
             for i in 0..2 {
                 for kk in 0..2 {
-                    let w = -dfdg[1 + i][1 + kk] / kp;
+                    let w = dfdg[1 + i][1 + kk];
                     for j in 0..3 {
                         dfl[1 + i][j] +=
-                            w * (0..3).map(|c| ft_old[c] * dcols[1 + kk][c][j]).sum::<f64>();
+                            w * (0..3).map(|c| e_old[c] * dcols[1 + kk][c][j]).sum::<f64>();
                     }
                 }
             }
@@ -563,7 +566,7 @@ pub fn evaluate(
         sticking: lo.sticking,
         branch: lo.branch,
         cone_excess: lo.cone_excess,
-        ft_new: lo.ft_new,
+        elastic_slip: lo.elastic_slip,
         d,
         frame: cols,
         dr_ds,
@@ -599,9 +602,22 @@ mod tests {
                 kappa: 7.0,
             },
             PairLaw::Penalty {
-                kp: 50.0,
-                mu: 0.3,
-                ft_old: [0.2, -0.1, 0.05],
+                law: PenaltyLaw {
+                    kn: 50.0,
+                    mu: 0.3,
+                    slip: 0.02,
+                    stick_scale: 1.0,
+                },
+                e_old: [0.004, -0.002, 0.001],
+            },
+            PairLaw::Penalty {
+                law: PenaltyLaw {
+                    kn: 50.0,
+                    mu: 0.3,
+                    slip: 1.0,
+                    stick_scale: 0.3,
+                },
+                e_old: [-0.01, 0.02, 0.005],
             },
             PairLaw::TiedAlm { kappa: 3.0 },
             PairLaw::TiedPenalty { kp: 20.0 },
@@ -619,6 +635,7 @@ mod tests {
             shift,
         };
         let mut branches = std::collections::BTreeSet::new();
+        let mut penalty_states = std::collections::BTreeSet::new();
         for nodes in [&face[..], &tri[..]] {
             let xi = if nodes.len() == 3 {
                 [0.3, 0.35]
@@ -632,6 +649,9 @@ mod tests {
                     let (w, dn) = face_shape(nodes.len(), xi);
                     let base = evaluate(&x, &w, &dn, lam, &off(0.01), law, Decision::Natural);
                     branches.insert(format!("{:?}", base.branch));
+                    if let PairLaw::Penalty { .. } = law {
+                        penalty_states.insert((base.active, base.sticking));
+                    }
                     let forced = Decision::Forced(base.branch);
                     let nr = base.r.len();
                     let np = x.len();
@@ -700,6 +720,12 @@ mod tests {
         for t in ["Stick", "Slip", "active: false"] {
             assert!(branches.iter().any(|b| b.contains(t)), "{t}: {branches:?}");
         }
+        // ... and stick, slip and separation of the penalty law (with a carried slip).
+        let want = [(true, true), (true, false), (false, false)];
+        assert!(
+            want.iter().all(|s| penalty_states.contains(s)),
+            "{penalty_states:?}"
+        );
     }
 
     /// On a curved tri6 face (midside nodes lifted) the closest point search converges
@@ -776,9 +802,13 @@ mod tests {
                 shift: 0.0,
             },
             &PairLaw::Penalty {
-                kp: 10.0,
-                mu: 0.0,
-                ft_old: [0.0; 3],
+                law: PenaltyLaw {
+                    kn: 10.0,
+                    mu: 0.0,
+                    slip: 1.0,
+                    stick_scale: 1.0,
+                },
+                e_old: [0.0; 3],
             },
             Decision::Natural,
         );

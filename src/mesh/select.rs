@@ -59,6 +59,30 @@ pub fn face_area(x: &[[f64; 3]]) -> f64 {
     }
 }
 
+/// The mean size of the given faces: each face's mean corner-to-corner edge length (a
+/// tri6's corners only), averaged over the faces; 0 for none.
+pub fn mean_face_size<'a>(mesh: &Mesh, faces: impl IntoIterator<Item = &'a FaceRef>) -> f64 {
+    let (mut sum, mut count) = (0.0, 0usize);
+    for &f in faces {
+        let nodes = mesh.face_nodes(f);
+        let corners = if nodes.len() == 6 { 3 } else { nodes.len() };
+        let x = |k: usize| mesh.coords[nodes[k % corners]];
+        let edges: f64 = (0..corners)
+            .map(|k| {
+                let (a, b) = (x(k), x(k + 1));
+                ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
+            })
+            .sum();
+        sum += edges / corners as f64;
+        count += 1;
+    }
+    if count == 0 {
+        0.0
+    } else {
+        sum / count as f64
+    }
+}
+
 /// Each node's tributary area on the given faces: every face's area split equally
 /// among its nodes; a tri6 face is split into its four sub-triangles through the
 /// midside nodes first (corners get a twelfth of a flat face, midside nodes a quarter),

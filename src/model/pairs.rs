@@ -9,14 +9,16 @@
 #![allow(clippy::needless_range_loop)]
 
 use super::contribution::{
-    Center, Column, Combine, Contribution, Evaluation, Explicit, FieldSpec, Outputs, Reduce,
-    Reference, Scaled, State, SummaryEntry,
+    Center, Column, Combine, Contribution, Evaluation, Explicit, FieldSpec, Outputs, Recovery,
+    Reduce, Reference, Scaled, State, SummaryEntry,
 };
 use super::dofs::{DofMap, Unknowns};
 use super::kind::{ContributionKind, Localizer};
 use super::local::{LocalElements, LocalMesh};
+use super::walls::{soften_cycling, CYCLING_FLIPS};
 use crate::contact::law::{AlmLaw, Branch, Decision, Threshold};
 use crate::contact::pair::{evaluate, Offsets, PairLaw};
+use crate::contact::penalty::{PenaltyLaw, SLIP_TOLERANCE};
 use crate::contact::wall::ContactMethod;
 use crate::curve::Curve;
 use serde::{Deserialize, Serialize};
@@ -62,6 +64,11 @@ pub struct PairsDef {
     /// unknown s, the section's shortening.
     #[serde(default)]
     pub pretension: Option<Pretension>,
+    /// The mean size of the contact faces (the tracked surface's, else the reference
+    /// ones'): penalty friction's allowable elastic slip is
+    /// [`crate::contact::penalty::SLIP_TOLERANCE`] of it.
+    #[serde(default)]
+    pub face_size: f64,
 }
 
 /// A pretension section (Abaqus `*PRE-TENSION SECTION`, LS-DYNA
@@ -204,6 +211,8 @@ struct PairState {
     active: bool,
     sticking: bool,
     branch: Branch,
+    /// Where the tracked node is (for messages).
+    x: [f64; 3],
 }
 
 /// One `[[pairs]]` entry on this rank (the pairs of its owned tracked nodes).
@@ -219,10 +228,17 @@ pub struct Pairs {
     d0: Vec<[f64; 3]>,
     d_old: Vec<[f64; 3]>,
     d_new: Vec<[f64; 3]>,
-    /// Penalty's tangential force carried over steps (global).
-    ft_old: Vec<[f64; 3]>,
-    ft_new: Vec<[f64; 3]>,
+    /// Penalty's elastic slip carried over steps (global, see
+    /// [`crate::contact::penalty`]).
+    slip_old: Vec<[f64; 3]>,
+    slip_new: Vec<[f64; 3]>,
     last: Vec<PairState>,
+    /// Stick/slip flips of each pair since the last commit.
+    flips: Vec<u32>,
+    /// Penalty: each pair's factor on its stick stiffness μ f_N / δ, lowered for a pair
+    /// that cycled in a failed attempt (as the walls' nodes, see
+    /// [`super::walls`]), kept for the rest of the run.
+    stick_scale: Vec<f64>,
     started: bool,
     /// A pretension section: the local block of s (its first component), whether this
     /// rank owns it, the time of the last evaluation, and s where it was locked.
@@ -243,9 +259,11 @@ impl Pairs {
             d0: vec![[0.0; 3]; n],
             d_old: vec![[0.0; 3]; n],
             d_new: vec![[0.0; 3]; n],
-            ft_old: vec![[0.0; 3]; n],
-            ft_new: vec![[0.0; 3]; n],
+            slip_old: vec![[0.0; 3]; n],
+            slip_new: vec![[0.0; 3]; n],
             last: vec![PairState::default(); n],
+            flips: vec![0; n],
+            stick_scale: vec![1.0; n],
             started: false,
             s_block: None,
             s_owner: false,
@@ -258,6 +276,11 @@ impl Pairs {
 
     fn is_alm(&self) -> bool {
         self.def.method == ContactMethod::Alm
+    }
+
+    /// Frictional penalty pairs: their stick is softened where it cycles.
+    fn softens(&self) -> bool {
+        self.def.method == ContactMethod::Penalty && !self.def.tied && self.def.friction > 0.0
     }
 
     fn law(&self, j: usize) -> PairLaw {
@@ -275,9 +298,13 @@ impl Pairs {
                 kappa: self.kappa[j],
             },
             (ContactMethod::Penalty, false) => PairLaw::Penalty {
-                kp,
-                mu: self.def.friction,
-                ft_old: self.ft_old[j],
+                law: PenaltyLaw {
+                    kn: kp,
+                    mu: self.def.friction,
+                    slip: SLIP_TOLERANCE * self.def.face_size,
+                    stick_scale: self.stick_scale[j],
+                },
+                e_old: self.slip_old[j],
             },
             (ContactMethod::Penalty, true) => PairLaw::TiedPenalty { kp },
         }
@@ -522,7 +549,11 @@ impl Contribution for Pairs {
                 continue;
             }
             self.d_new[j] = e.d;
-            self.ft_new[j] = e.ft_new;
+            self.slip_new[j] = e.elastic_slip;
+            let was = self.last[j];
+            if was.active && e.active && was.sticking != e.sticking {
+                self.flips[j] += 1;
+            }
             self.last[j] = PairState {
                 gap: e.gap,
                 force: e.force,
@@ -536,12 +567,15 @@ impl Contribution for Pairs {
                 active: e.active,
                 sticking: e.sticking,
                 branch: e.branch,
+                x: x[0],
             };
         }
         Ok(())
     }
 
-    /// `[started, t, s, locked, s_lock, d0 (3 n), d_old (3 n), ft_old (3 n)]`.
+    /// `[started, t, s, locked, s_lock, d0 (3 n), d_old (3 n), slip_old (3 n: penalty's
+    /// elastic slip), (active, sticking, stick_scale) (3 n)]`: contact and stick at the
+    /// last evaluation, against which the next step counts stick/slip flips.
     fn saved_state(&self) -> Vec<f64> {
         let mut s = vec![
             f64::from(u8::from(self.started)),
@@ -550,16 +584,23 @@ impl Contribution for Pairs {
             f64::from(u8::from(self.s_lock.is_some())),
             self.s_lock.unwrap_or(0.0),
         ];
-        for v in [&self.d0, &self.d_old, &self.ft_old] {
+        for v in [&self.d0, &self.d_old, &self.slip_old] {
             s.extend(v.iter().flatten());
+        }
+        for (c, k) in self.last.iter().zip(&self.stick_scale) {
+            s.extend([
+                f64::from(u8::from(c.active)),
+                f64::from(u8::from(c.sticking)),
+                *k,
+            ]);
         }
         s
     }
 
     fn restore_state(&mut self, s: &[f64]) -> Result<(), String> {
         let n = self.d0.len();
-        if s.len() != 5 + 9 * n {
-            return Err(format!("{} values for {} expected", s.len(), 5 + 9 * n));
+        if s.len() != 5 + 12 * n {
+            return Err(format!("{} values for {} expected", s.len(), 5 + 12 * n));
         }
         self.started = s[0] != 0.0;
         self.t_new = s[1];
@@ -569,16 +610,22 @@ impl Contribution for Pairs {
             let at = |o: usize| [s[o + 3 * j], s[o + 3 * j + 1], s[o + 3 * j + 2]];
             self.d0[j] = at(5);
             self.d_old[j] = at(5 + 3 * n);
-            self.ft_old[j] = at(5 + 6 * n);
+            self.slip_old[j] = at(5 + 6 * n);
+            let [active, sticking, k] = at(5 + 9 * n);
+            self.last[j].active = active != 0.0;
+            self.last[j].sticking = sticking != 0.0;
+            self.stick_scale[j] = k;
         }
         self.d_new.copy_from_slice(&self.d_old);
-        self.ft_new.copy_from_slice(&self.ft_old);
+        self.slip_new.copy_from_slice(&self.slip_old);
+        self.flips.iter_mut().for_each(|f| *f = 0);
         Ok(())
     }
 
     fn commit(&mut self) {
         self.d_old.copy_from_slice(&self.d_new);
-        self.ft_old.copy_from_slice(&self.ft_new);
+        self.slip_old.copy_from_slice(&self.slip_new);
+        self.flips.iter_mut().for_each(|f| *f = 0);
         if let Some(p) = &self.def.pretension {
             if self.s_lock.is_none() && self.t_new >= p.lock_at - 1e-12 * p.lock_at.abs().max(1.0) {
                 self.s_lock = Some(self.s_new);
@@ -594,6 +641,43 @@ impl Contribution for Pairs {
     }
     fn explicit(&mut self) -> Option<&mut dyn Explicit> {
         Some(self)
+    }
+    fn recovery(&self) -> Option<&dyn Recovery> {
+        Some(self)
+    }
+    fn recovery_mut(&mut self) -> Option<&mut dyn Recovery> {
+        Some(self)
+    }
+}
+
+impl Recovery for Pairs {
+    /// Penalty pairs with friction: stick/slip cycling as for walls, pairs that switched
+    /// between stick and slip at least [`CYCLING_FLIPS`] times since the step began.
+    /// (ALM pairs report nothing and keep their stick stiffness, as before.)
+    fn diagnose(&self) -> Option<String> {
+        if !self.softens() {
+            return None;
+        }
+        let cycling: Vec<usize> = (0..self.flips.len())
+            .filter(|&j| self.flips[j] >= CYCLING_FLIPS)
+            .collect();
+        let worst = *cycling.iter().max_by_key(|&&j| self.flips[j])?;
+        let x = self.last[worst].x;
+        Some(format!(
+            "stick/slip cycling at pairs `{}`: {} pair(s) switched between stick and slip {CYCLING_FLIPS} or more times in this step, one {} times at ({:.4e}, {:.4e}, {:.4e})",
+            self.def.name,
+            cycling.len(),
+            self.flips[worst],
+            x[0],
+            x[1],
+            x[2]
+        ))
+    }
+
+    /// A penalty pair that cycled gets its stick stiffness × 0.3, twice at most, as a
+    /// wall's node does.
+    fn after_failed_attempt(&mut self) -> bool {
+        self.softens() && soften_cycling(&self.flips, &mut self.stick_scale)
     }
 }
 
@@ -733,5 +817,113 @@ impl Outputs for Pairs {
             };
             out[2][3 * n..3 * n + 3].copy_from_slice(&c.force);
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::contact::pair::face_shape;
+    use crate::parallel::run_ranks;
+
+    /// A frictional penalty pair (k_N = 1, μ = 0.5, faces of size 1: δ = 0.005): its
+    /// node pressed 0.1 through a unit face and slid along it step by step sticks while
+    /// the elastic slip carried across commits stays below δ, then slips at μ f_N; the
+    /// state survives a restart round trip, and a cycling pair is reported and softened.
+    #[test]
+    fn a_penalty_pair_carries_its_elastic_slip_and_softens_where_it_cycles() {
+        run_ranks(1, |c| {
+            let (w, dn) = face_shape(4, [0.0, 0.0]);
+            let def = PairsDef {
+                name: "p".into(),
+                method: ContactMethod::Penalty,
+                tied: false,
+                friction: 0.5,
+                kappa: None,
+                penalty_scale: 1.0,
+                tangential_augmentation: 1.0,
+                friction_threshold: Threshold::Multiplier,
+                tracked: "t".into(),
+                reference: "r".into(),
+                pairs: vec![Pair {
+                    node: 0,
+                    nodes: vec![1, 2, 3, 4],
+                    w,
+                    dn,
+                    area: 1.0,
+                }],
+                unpaired: 0,
+                search_distance: None,
+                mortar: false,
+                pretension: None,
+                face_size: 1.0,
+            };
+            let coords = [
+                [0.5, 0.5, 0.0],
+                [0.0, 0.0, 0.0],
+                [1.0, 0.0, 0.0],
+                [1.0, 1.0, 0.0],
+                [0.0, 1.0, 0.0],
+            ];
+            let dofs = DofMap::new(c, &[5], &[], &[Unknowns::default()]);
+            let fresh = || {
+                let mut p = Pairs::new(def.clone());
+                p.bind(&dofs, 0);
+                p
+            };
+            let eval = |p: &mut Pairs, ux: f64| {
+                let mut u = [0.0; 15];
+                (u[0], u[2]) = (ux, -0.1);
+                let (mut fi, mut fe) = ([0.0; 15], [0.0; 15]);
+                let mut ev = Evaluation {
+                    t: 0.0,
+                    coords: &coords,
+                    dofs: &dofs,
+                    u: &u,
+                    forces: Some((&mut fi, &mut fe)),
+                    jacobian: None,
+                    frozen: false,
+                };
+                p.evaluate(&mut ev).unwrap();
+                p.last[0]
+            };
+            let close = |a: f64, b: f64| (a - b).abs() < 1e-12;
+            let mut p = fresh();
+            let s = eval(&mut p, 0.002);
+            assert!(
+                s.active && s.sticking && close(s.normal_force, 0.1),
+                "{s:?}"
+            );
+            assert!(close(s.force[0], -10.0 * 0.002), "{s:?}");
+            p.commit();
+            let s = eval(&mut p, 0.004);
+            assert!(s.sticking && close(s.force[0], -10.0 * 0.004), "{s:?}");
+            p.commit();
+            let saved = p.saved_state();
+            let slip = eval(&mut p, 0.006);
+            assert!(!slip.sticking && close(slip.force[0], -0.05), "{slip:?}");
+            let mut r = fresh();
+            r.restore_state(&saved).unwrap();
+            assert_eq!(eval(&mut r, 0.006).force, slip.force);
+            // Back and forth across the cone within one step: reported, then softened.
+            for k in 0..8 {
+                eval(&mut p, if k % 2 == 0 { 0.004 } else { 0.006 });
+            }
+            let why = p.diagnose().expect("cycling is reported");
+            assert!(
+                why.contains("pairs `p`") && why.contains("1 pair(s)"),
+                "{why}"
+            );
+            assert!(p.after_failed_attempt());
+            assert!(p.after_failed_attempt());
+            assert!(!p.after_failed_attempt());
+            assert!(close(p.stick_scale[0], 0.09));
+            let soft = p.saved_state();
+            let mut r = fresh();
+            r.restore_state(&soft).unwrap();
+            assert!(close(r.stick_scale[0], 0.09));
+            p.commit();
+            assert!(p.diagnose().is_none());
+        });
     }
 }

@@ -14,7 +14,9 @@ use crate::{Error, Result};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
-/// Bumped when the layout changes: an older file is refused, not misread.
+/// Bumped when the layout changes: an older file is refused, not misread. 3: penalty
+/// contact carries its elastic slip (not its tangential force), pairs keep their
+/// contact, stick and stick softening, and `solver = "auto"` its learned state.
 pub const FORMAT: u32 = 3;
 
 #[derive(Debug, Clone, Serialize, Deserialize)]

@@ -8,7 +8,7 @@ use super::context::Context;
 use super::deck::{BoltDeck, LockAt, PairsDeck, Weights};
 use crate::contact::law::{Threshold, DEFAULT_TANGENTIAL_AUGMENTATION};
 use crate::contact::wall::ContactMethod;
-use crate::mesh::select::tributary_areas;
+use crate::mesh::select::{mean_face_size, tributary_areas};
 use crate::mesh::ElemKind;
 use crate::model::pairing::{mortar_integrals, pair_nodes};
 use crate::model::pairs::{PairsDef, Pretension};
@@ -255,5 +255,10 @@ fn build_one(d: &PairsDeck, f: &str, ctx: &Context) -> Result<PairsDef> {
         search_distance: d.search_distance,
         mortar: weights == Weights::Mortar,
         pretension: None,
+        // The tracked side's faces where it is a surface, else the reference faces.
+        face_size: match tracked_faces {
+            Some(tf) if !tf.is_empty() => mean_face_size(mesh, tf),
+            _ => mean_face_size(mesh, faces),
+        },
     })
 }

@@ -12,7 +12,7 @@ use crate::contact::law::DEFAULT_TANGENTIAL_AUGMENTATION;
 use crate::contact::motion::{DofMotion, MotionKind, RigidMotion, DOF_NAMES};
 use crate::contact::wall::{project, ShapeDef};
 use crate::curve::Curve;
-use crate::mesh::select::tributary_areas;
+use crate::mesh::select::{mean_face_size, tributary_areas};
 use crate::model::body::BodyDef;
 use crate::model::walls::WallDef;
 use crate::Result;
@@ -472,6 +472,33 @@ fn tracked_nodes(w: &WallDeck, f: &str, ctx: &Context) -> Result<(String, Vec<us
     Ok((set, nodes, areas))
 }
 
+/// The mean size of the tracked faces (boundary faces whose nodes are all tracked), or
+/// where there are none (isolated nodes) of the boundary faces touching a tracked node,
+/// or of the whole boundary: penalty friction's allowable elastic slip scales with it.
+fn tracked_face_size(nodes: &[usize], ctx: &Context) -> f64 {
+    let tracked: BTreeSet<usize> = nodes.iter().copied().collect();
+    let tracked = &tracked;
+    let faces_where = |all: bool| {
+        ctx.boundary.iter().filter(move |fr| {
+            let mut ns = ctx.mesh.face_nodes(**fr).into_iter();
+            if all {
+                ns.all(|n| tracked.contains(&n))
+            } else {
+                ns.any(|n| tracked.contains(&n))
+            }
+        })
+    };
+    let size = mean_face_size(ctx.mesh, faces_where(true));
+    if size > 0.0 {
+        return size;
+    }
+    let size = mean_face_size(ctx.mesh, faces_where(false));
+    if size > 0.0 {
+        return size;
+    }
+    mean_face_size(ctx.mesh, ctx.boundary)
+}
+
 fn build_wall(w: &WallDeck, f: &str, ctx: &Context, entity: bool) -> Result<WallDef> {
     let mut shape = shape_def(w, f)?;
     if w.point.iter().any(|x| !x.is_finite()) {
@@ -596,6 +623,7 @@ fn build_wall(w: &WallDeck, f: &str, ctx: &Context, entity: bool) -> Result<Wall
         friction_threshold: w.friction_threshold,
         stick_lock_flips: w.stick_lock_flips,
         set,
+        face_size: tracked_face_size(&nodes, ctx),
         nodes,
         areas,
         body: entity.then_some(BodyDef {

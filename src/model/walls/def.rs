@@ -34,6 +34,11 @@ pub struct WallDef {
     pub nodes: Vec<usize>,
     /// Tributary area of each tracked node on the tracked surface (0 where unknown).
     pub areas: Vec<f64>,
+    /// The mean size of the tracked faces (their mean edge length, over the whole wall
+    /// before localizing): penalty friction's allowable elastic slip is
+    /// [`crate::contact::penalty::SLIP_TOLERANCE`] of it.
+    #[serde(default)]
+    pub face_size: f64,
     /// A contact entity's body (free DOFs, loads, traced points); None for a wall.
     #[serde(default)]
     pub body: Option<BodyDef>,

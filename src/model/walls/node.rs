@@ -1,13 +1,14 @@
 //! One wall on one rank: its owned tracked nodes, their contact state (stick/slip
-//! history, augmentation), and the node-by-node evaluation of the ALM or penalty law with
-//! its residual rows and generalized Jacobian blocks.
+//! history, augmentation, penalty's elastic slip), and the node-by-node evaluation of
+//! the ALM or penalty law with its residual rows and generalized Jacobian blocks.
 
 // Index loops over 3×3 frames read like the formulas.
 #![allow(clippy::needless_range_loop)]
 
 use super::def::WallDef;
-use crate::contact::law::{alm_law, penalty, AlmLaw, Branch, Decision};
+use crate::contact::law::{alm_law, AlmLaw, Branch, Decision};
 use crate::contact::motion::Pose;
+use crate::contact::penalty::{penalty, PenaltyLaw, SLIP_TOLERANCE};
 use crate::contact::shape::Shape;
 use crate::contact::wall::{project, ContactMethod};
 use crate::model::body::Body;
@@ -39,12 +40,26 @@ pub struct NodeContact {
 
 /// Stick/slip switches of one node within a step from which a failed step is reported as
 /// stick/slip cycling.
-pub(super) const CYCLING_FLIPS: u32 = 4;
+pub const CYCLING_FLIPS: u32 = 4;
 
-/// The cut on a cycling node's tangential augmentation after a failed attempt, and its
-/// floor (two cuts).
-pub(super) const ALPHA_CUT: f64 = 0.3;
-pub(super) const ALPHA_FLOOR: f64 = 0.09;
+/// The cut on a cycling node's stick stiffness (ALM: its tangential augmentation α;
+/// penalty: μ f_N / δ) after a failed attempt, and its floor (two cuts).
+pub(super) const STICK_CUT: f64 = 0.3;
+pub(super) const STICK_FLOOR: f64 = 0.09;
+
+/// After a failed attempt: each node that switched between stick and slip at least
+/// [`CYCLING_FLIPS`] times gets its stick factor × [`STICK_CUT`], down to
+/// [`STICK_FLOOR`]. Returns whether any factor changed.
+pub fn soften_cycling(flips: &[u32], stick_scale: &mut [f64]) -> bool {
+    let mut changed = false;
+    for (f, s) in flips.iter().zip(stick_scale.iter_mut()) {
+        if *f >= CYCLING_FLIPS && *s > STICK_FLOOR {
+            *s = (*s * STICK_CUT).max(STICK_FLOOR);
+            changed = true;
+        }
+    }
+    changed
+}
 
 /// One wall on this rank (its owned tracked nodes).
 #[derive(Debug)]
@@ -69,16 +84,19 @@ pub struct Wall {
     /// keeps a penetrating node on the face it came through) and at the last evaluation.
     pub(super) n_old: Vec<Option<[f64; 3]>>,
     pub(super) n_new: Vec<Option<[f64; 3]>>,
-    /// Penalty tangential force carried over steps (global vector).
-    pub(super) ft_old: Vec<[f64; 3]>,
-    pub(super) ft_new: Vec<[f64; 3]>,
+    /// Penalty's elastic slip carried over steps (global vector, see
+    /// [`crate::contact::penalty`]).
+    pub(super) slip_old: Vec<[f64; 3]>,
+    pub(super) slip_new: Vec<[f64; 3]>,
     pub last: Vec<NodeContact>,
     /// Stick/slip flips of each node since the last commit.
     pub(super) flips: Vec<u32>,
-    /// Each node's factor on the tangential augmentation α: 1, lowered for a node that
-    /// cycled between stick and slip in a failed attempt (see
-    /// [`crate::model::contribution::Recovery::after_failed_attempt`]), and kept for the rest of the run.
-    pub(super) alpha_scale: Vec<f64>,
+    /// Each node's factor on its stick stiffness (ALM: the tangential augmentation α;
+    /// penalty: μ f_N / δ): 1, lowered for a node that cycled between stick and slip in
+    /// a failed attempt (see
+    /// [`crate::model::contribution::Recovery::after_failed_attempt`]), and kept for the
+    /// rest of the run.
+    pub(super) stick_scale: Vec<f64>,
     /// A contact entity's body.
     pub body: Option<Body>,
 }
@@ -94,7 +112,8 @@ pub(super) struct NodeEval {
     pub(super) k_xl: [[f64; 3]; 3],
     pub(super) k_lx: [[f64; 3]; 3],
     pub(super) k_ll: [[f64; 3]; 3],
-    pub(super) ft_new: [f64; 3],
+    /// Penalty: the elastic slip at this evaluation (global).
+    pub(super) slip_new: [f64; 3],
     pub(super) normal: Option<[f64; 3]>,
     /// The node's projection on the wall.
     pub(super) point: Option<[f64; 3]>,
@@ -119,11 +138,11 @@ impl Wall {
             x_new: x0,
             n_old: vec![None; n],
             n_new: vec![None; n],
-            ft_old: vec![[0.0; 3]; n],
-            ft_new: vec![[0.0; 3]; n],
+            slip_old: vec![[0.0; 3]; n],
+            slip_new: vec![[0.0; 3]; n],
             last: vec![NodeContact::default(); n],
             flips: vec![0; n],
-            alpha_scale: vec![1.0; n],
+            stick_scale: vec![1.0; n],
             body,
             def,
         }
@@ -150,7 +169,7 @@ impl Wall {
     pub(super) fn law(&self, j: usize) -> AlmLaw {
         AlmLaw {
             mu: self.def.friction,
-            alpha: self.def.tangential_augmentation * self.alpha_scale[j],
+            alpha: self.def.tangential_augmentation * self.stick_scale[j],
             threshold: self.def.friction_threshold,
         }
     }
@@ -192,7 +211,7 @@ impl Wall {
             k_xl: [[0.0; 3]; 3],
             k_lx: [[0.0; 3]; 3],
             k_ll: [[0.0; 3]; 3],
-            ft_new: [0.0; 3],
+            slip_new: [0.0; 3],
             normal: None,
             point: None,
             dpoint: [[0.0; 3]; 3],
@@ -281,8 +300,19 @@ impl Wall {
         (fl, dfdg)
     }
 
+    /// The penalty law of this wall at node `j`: k_N from the node's stiffness, the
+    /// allowable elastic slip from the tracked faces' size, the node's stick softening.
+    pub(super) fn penalty_law(&self, j: usize) -> PenaltyLaw {
+        PenaltyLaw {
+            kn: self.def.penalty_scale * self.k_node[j],
+            mu: self.def.friction,
+            slip: SLIP_TOLERANCE * self.def.face_size,
+            stick_scale: self.stick_scale[j],
+        }
+    }
+
     /// The penalty law at node `j` for the gaps `g` in the frame `p`: the local force and
-    /// ∂f/∂g; fills the node's state and its carried tangential force.
+    /// ∂f/∂g; fills the node's state and its elastic slip.
     fn penalty_local(
         &self,
         j: usize,
@@ -292,27 +322,26 @@ impl Wall {
         pose_old: &Pose,
         e: &mut NodeEval,
     ) -> ([f64; 3], [[f64; 3]; 3]) {
-        let mu = self.def.friction;
-        // The force carried from the last step turns with the wall (or body) over
-        // the step: R Rₙᵀ f (objective; the entity coupling's Jacobian assumes it).
-        let f0 = self.ft_old[j];
-        let fo: [f64; 3] = std::array::from_fn(|i| {
+        // The elastic slip carried from the last step turns with the wall (or body) over
+        // the step: R Rₙᵀ e (objective; the entity coupling's Jacobian assumes it).
+        let e0 = self.slip_old[j];
+        let eo: [f64; 3] = std::array::from_fn(|i| {
             (0..3)
-                .map(|k| (0..3).map(|l| pose.r[i][l] * pose_old.r[k][l]).sum::<f64>() * f0[k])
+                .map(|k| (0..3).map(|l| pose.r[i][l] * pose_old.r[k][l]).sum::<f64>() * e0[k])
                 .sum()
         });
         let t1 = [p[0][1], p[1][1], p[2][1]];
         let t2 = [p[0][2], p[1][2], p[2][2]];
-        let fo_l = [
-            t1[0] * fo[0] + t1[1] * fo[1] + t1[2] * fo[2],
-            t2[0] * fo[0] + t2[1] * fo[1] + t2[2] * fo[2],
+        let eo_l = [
+            t1[0] * eo[0] + t1[1] * eo[1] + t1[2] * eo[2],
+            t2[0] * eo[0] + t2[1] * eo[1] + t2[2] * eo[2],
         ];
-        let kp = self.def.penalty_scale * self.k_node[j];
-        let pt = penalty(g, fo_l, kp, kp, mu);
+        let pt = penalty(g, eo_l, &self.penalty_law(j));
         e.c.active = pt.active;
         e.c.sticking = pt.sticking;
+        let es = pt.elastic_slip;
         for i in 0..3 {
-            e.ft_new[i] = t1[i] * pt.f[1] + t2[i] * pt.f[2];
+            e.slip_new[i] = t1[i] * es[0] + t2[i] * es[1];
         }
         (pt.f, pt.df_dg)
     }
