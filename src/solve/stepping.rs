@@ -39,11 +39,7 @@ pub fn model_solver<'o>(comm: &dyn Comm, model: &Model, opts: &'o NonlinearOptio
     if opts.rigid_body_modes || opts.preconditioner.wants_points() || opts.export_system.is_some() {
         pc = pc.with_points(model.node_points(), opts.rigid_body_modes);
     }
-    let mut solver = Solver::new(opts, k, pc);
-    let mut owned = [model.n_owned_dofs() as f64];
-    comm.allreduce_max(&mut owned);
-    solver.auto = crate::solve::nonlinear::auto::AutoState::new(owned[0] as usize);
-    solver
+    Solver::new(opts, k, pc)
 }
 
 /// Called with every converged step, its solution, the model (output, progress) and

@@ -5,7 +5,7 @@
 //! Jacobian assembly, the preconditioned linear solve and the line search are written
 //! once here; a method ([`NonlinearSolver`]: Newton, BFGS, JFNK) provides only its step.
 
-use super::auto::{chain, merge, AutoState, Switch};
+use super::auto::{links, merge, AutoState, Switch};
 use super::common::{Constraints, Eval, Monitor, Verdict};
 use super::{
     Failure, LineSearch, NonlinearOptions, NonlinearProblem, Preconditioning, SolveStats,
@@ -30,9 +30,7 @@ pub struct Solver<'o> {
 
 impl<'o> Solver<'o> {
     pub fn new(opts: &'o NonlinearOptions, k: DistMatrix, pc: Preconditioning) -> Self {
-        // The caller that knows the communicator sets the factor weight from the largest
-        // rank's share (`stepping::model_solver`): every rank must choose alike.
-        let auto = AutoState::new(0);
+        let auto = AutoState::default();
         Self { opts, k, pc, auto }
     }
 
@@ -67,8 +65,9 @@ impl<'o> Solver<'o> {
         prescribed: &[(usize, f64)],
         start: Start,
     ) -> Result<SolveStats> {
+        let clock = std::time::Instant::now();
         let first = self.auto.choose();
-        let links = chain(first);
+        let links = links(first, self.auto.incumbent());
         let u0 = u.to_vec();
         let mut total = SolveStats::default();
         for (i, link) in links.iter().enumerate() {
@@ -92,8 +91,9 @@ impl<'o> Solver<'o> {
                 });
             }
         }
-        let work = self.auto.work_of(&total);
-        self.auto.record(first, work);
+        let mut seconds = [clock.elapsed().as_secs_f64()];
+        comm.allreduce_max(&mut seconds);
+        self.auto.record(first, seconds[0]);
         Ok(total)
     }
 
