@@ -68,9 +68,10 @@ enum Command {
         /// The rank count to partition for.
         #[arg(short = 'n', long, value_parser = clap::value_parser!(u32).range(1..))]
         ranks: u32,
-        /// Partition cache directory.
-        #[arg(long, default_value = "partitions")]
-        partitions: PathBuf,
+        /// Partition cache directory (default $XDG_CACHE_HOME/alfe/partitions, else
+        /// ~/.cache/alfe/partitions).
+        #[arg(long, value_name = "DIR")]
+        partitions: Option<PathBuf>,
     },
 }
 
@@ -91,9 +92,10 @@ struct RunArgs {
     /// Results directory (default out/<scene>).
     #[arg(short, long, value_name = "DIR")]
     out: Option<PathBuf>,
-    /// Partition cache directory.
-    #[arg(long, value_name = "DIR", default_value = "partitions")]
-    partitions: PathBuf,
+    /// Partition cache directory (default $XDG_CACHE_HOME/alfe/partitions, else
+    /// ~/.cache/alfe/partitions).
+    #[arg(long, value_name = "DIR")]
+    partitions: Option<PathBuf>,
     /// Recompute a cached partition instead of using it.
     #[arg(long)]
     repartition: bool,
@@ -293,7 +295,9 @@ fn main_inner(comm: &dyn Comm, raw: Vec<String>) -> Result<()> {
                 contact: a.contact.map(ContactArg::method),
                 target: deck,
                 out: a.out,
-                partitions: a.partitions,
+                partitions: a
+                    .partitions
+                    .unwrap_or_else(alfe::partition::cache::default_dir),
                 repartition: a.repartition,
                 quiet: a.quiet,
                 solver: a.solver.map(SolverArg::kind),
@@ -384,6 +388,7 @@ fn main_inner(comm: &dyn Comm, raw: Vec<String>) -> Result<()> {
             partitions,
         } => {
             let t = target(t);
+            let partitions = partitions.unwrap_or_else(alfe::partition::cache::default_dir);
             let r =
                 alfe::parallel::on_rank0(comm, || app::partition(&t, ranks as usize, &partitions))?;
             if let Some(s) = r {

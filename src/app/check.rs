@@ -85,8 +85,8 @@ fn describe(def: &ModelDef, run: &RunSettings) -> String {
         m.n_elems(),
         kinds.join(", "),
         def.constraints.len(),
-        def.node_sets.iter().map(|(k, v)| format!("{k} ({} nodes)", v.len())).collect::<Vec<_>>().join(", "),
-        def.surfaces.iter().map(|(k, v)| format!("{k} ({} faces)", v.len())).collect::<Vec<_>>().join(", "),
+        or_none(def.node_sets.iter().map(|(k, v)| format!("{k} ({} nodes)", v.len())).collect()),
+        or_none(def.surfaces.iter().map(|(k, v)| format!("{k} ({} faces)", v.len())).collect()),
         nominal_steps(&run.analysis),
     );
     for w in &run.warnings {
@@ -100,6 +100,15 @@ fn describe(def: &ModelDef, run: &RunSettings) -> String {
         }
     }
     s
+}
+
+/// A list joined by commas, or "none".
+fn or_none(items: Vec<String>) -> String {
+    if items.is_empty() {
+        "none".into()
+    } else {
+        items.join(", ")
+    }
 }
 
 /// Steps at the deck's step size ("from the mesh" for explicit runs without one).

@@ -63,7 +63,7 @@ impl RunOptions {
         Self {
             target: target.into(),
             out: None,
-            partitions: PathBuf::from("partitions"),
+            partitions: crate::partition::cache::default_dir(),
             repartition: false,
             quiet: false,
             solver: None,

@@ -400,7 +400,7 @@ pub fn report(values: &[QuantityValue]) -> Vec<String> {
                     s.push_str(&if abs {
                         format!(", tolerance {t:.1e}")
                     } else {
-                        format!(", tolerance {} %", 100.0 * t)
+                        format!(", tolerance {} %", percent(t))
                     });
                 }
                 s.push(')');
@@ -417,8 +417,28 @@ pub fn report(values: &[QuantityValue]) -> Vec<String> {
         .collect()
 }
 
+/// A tolerance as a percentage the way a person writes it: 0.01 %, 2.5 %, 1e-4 %
+/// (not 0.00009999999999999999 %).
+fn percent(t: f64) -> String {
+    let p = 100.0 * t;
+    if p != 0.0 && p.abs() < 1e-3 {
+        return format!("{p:.0e}");
+    }
+    let s = format!("{p:.6}");
+    s.trim_end_matches('0').trim_end_matches('.').to_string()
+}
+
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn tolerances_print_as_written() {
+        assert_eq!(super::percent(1e-6), "1e-4");
+        assert_eq!(super::percent(0.01), "1");
+        assert_eq!(super::percent(0.025), "2.5");
+        assert_eq!(super::percent(1e-4), "0.01");
+        assert_eq!(super::percent(0.0), "0");
+    }
+
     use super::*;
 
     fn q(expr: &str, when: When, reference: Option<f64>, tol: Option<f64>) -> QuantityDef {

@@ -8,6 +8,23 @@ use crate::{Error, Result};
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
+/// The cache when `--partitions` does not name one: `$XDG_CACHE_HOME/alfe/partitions`,
+/// else `$HOME/.cache/alfe/partitions` (the XDG convention: reused across runs and
+/// output directories, never written into the working directory), else `partitions`.
+pub fn default_dir() -> PathBuf {
+    let var = |k: &str| {
+        std::env::var_os(k)
+            .filter(|v| !v.is_empty())
+            .map(PathBuf::from)
+    };
+    var("XDG_CACHE_HOME")
+        .or_else(|| var("HOME").map(|h| h.join(".cache")))
+        .map_or_else(
+            || PathBuf::from("partitions"),
+            |d| d.join("alfe").join("partitions"),
+        )
+}
+
 pub fn path(dir: &Path, scene: &str, ranks: usize, req: &Request) -> PathBuf {
     let safe: String = scene
         .chars()

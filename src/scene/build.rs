@@ -6,7 +6,7 @@
 use super::check::{err, unique_names};
 use super::context::Context;
 use super::deck::*;
-use super::{coupling, dynamics, loads, pairs, parts, sets, settings, steps, walls, Scene};
+use super::{coupling, dynamics, loads, pairs, parts, sanity, sets, settings, steps, walls, Scene};
 use crate::mesh::select::bounding_box;
 use crate::model::def::*;
 use crate::Result;
@@ -67,7 +67,21 @@ pub fn build(deck: &Deck, deck_dir: &Path) -> Result<Scene> {
     contributions.extend(couplings.into_iter().map(ContributionDef::Coupling));
     contributions.extend(pairs.into_iter().map(ContributionDef::Pairs));
     contributions.extend(bolts.into_iter().map(ContributionDef::Pairs));
-    let (part_descriptions, warnings) = (parts.descriptions, parts.warnings);
+    let (part_descriptions, mut warnings) = (parts.descriptions, parts.warnings);
+    let walls_now: Vec<crate::model::walls::WallDef> = contributions
+        .iter()
+        .filter_map(|c| match c {
+            ContributionDef::Wall(w) => Some(w.clone()),
+            _ => None,
+        })
+        .collect();
+    warnings.extend(sanity::warnings(
+        deck,
+        &parts.mesh,
+        &resolved,
+        &constraints,
+        &walls_now,
+    ));
     let elem_patch = fbar_patches(&parts.mesh, &parts.formulation)?;
     let model = ModelDef {
         elem_patch,
@@ -142,6 +156,12 @@ fn check_names(deck: &Deck) -> Result<()> {
 /// `[analysis] end_time`: positive and finite.
 fn check_end_time(deck: &Deck) -> Result<()> {
     let a = &deck.analysis;
+    if a.end_time == 0.0 {
+        return Err(err(
+            "analysis.end_time",
+            "missing: give the end of the load path (the pseudo-time of a static run, the time of a dynamic one), or [[steps]] whose durations add up to it",
+        ));
+    }
     if !(a.end_time > 0.0 && a.end_time.is_finite()) {
         return Err(err(
             "analysis.end_time",

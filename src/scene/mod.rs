@@ -14,6 +14,7 @@ mod loads;
 pub mod overrides;
 pub mod pairs;
 mod parts;
+mod sanity;
 mod sets;
 mod settings;
 pub mod steps;

@@ -25,38 +25,55 @@ use super::dofs::{DofMap, Unknowns};
 use super::kind::{ContributionKind, Localizer};
 use super::local::{LocalElements, LocalMesh};
 use super::mat3::{cross, flat};
-use crate::contact::wall::{project, ContactMethod};
+use crate::contact::wall::{project, ContactMethod, WallPoint};
 pub use def::WallDef;
 pub(super) use node::{soften_cycling, CYCLING_FLIPS};
 pub use node::{NodeContact, Wall, LOCK_MARGIN};
 
+impl WallDef {
+    /// Each tracked node's projection on the wall at t = 0 (those that reach it), and
+    /// the tolerance under which a gap counts as touching.
+    fn initial_points(&self, coords: &[[f64; 3]]) -> (Vec<(usize, WallPoint)>, f64) {
+        let s = self.shape.build();
+        let pose = self.motion.pose(0.0);
+        let points = self
+            .nodes
+            .iter()
+            .filter_map(|&n| project(s.as_ref(), &pose, &pose, coords[n], None).map(|p| (n, p)))
+            .collect();
+        let size = coords.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
+        (points, 1e-9 * size.max(1.0))
+    }
+
+    /// The nodes that touch the wall at t = 0 and the wall's normal there: what holds
+    /// a model against rigid motion from the first step (`scene/sanity.rs`).
+    pub fn touching_at_start(&self, coords: &[[f64; 3]]) -> Vec<(usize, [f64; 3])> {
+        let (points, tol) = self.initial_points(coords);
+        points
+            .into_iter()
+            .filter(|(_, p)| p.gap <= tol)
+            .map(|(n, p)| (n, [p.frame[0][0], p.frame[1][0], p.frame[2][0]]))
+            .collect()
+    }
+}
+
 impl ContributionKind for WallDef {
     /// The tracked nodes' gaps at t = 0: the smallest and largest, and how many touch.
     fn initial_state(&self, coords: &[[f64; 3]]) -> Option<String> {
-        let s = self.shape.build();
-        let pose = self.motion.pose(0.0);
-        let gaps: Vec<f64> = self
-            .nodes
-            .iter()
-            .filter_map(|&n| {
-                crate::contact::wall::project(s.as_ref(), &pose, &pose, coords[n], None)
-            })
-            .map(|p| p.gap)
-            .collect();
-        if gaps.is_empty() {
+        let (points, tol) = self.initial_points(coords);
+        if points.is_empty() {
             return Some("no tracked node can reach it at t = 0".into());
         }
-        let (lo, hi) = gaps
+        let (lo, hi) = points
             .iter()
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &g| {
-                (a.min(g), b.max(g))
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), (_, p)| {
+                (a.min(p.gap), b.max(p.gap))
             });
-        let size = coords.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
-        let touching = gaps.iter().filter(|&&g| g <= 1e-9 * size.max(1.0)).count();
+        let touching = points.iter().filter(|(_, p)| p.gap <= tol).count();
         Some(format!(
             "initial gaps {lo:.4e} to {hi:.4e} ({touching} of {} nodes touching, {} out of reach)",
             self.nodes.len(),
-            self.nodes.len() - gaps.len()
+            self.nodes.len() - points.len()
         ))
     }
 
