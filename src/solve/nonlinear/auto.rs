@@ -27,7 +27,8 @@
 //! each probe that loses doubles that method's interval, and what a method was measured
 //! at fades ([`FORGET`]) while it is not run. A probe that fails falls back to the
 //! cheapest method's chain before Newton with line search. A start whose chain had to
-//! fall back is charged the whole chain's cost.
+//! fall back is charged the whole chain's cost, but one increment enters an average at
+//! no more than [`OUTLIER_CAP`] times it.
 
 use super::{LineSearch, NonlinearOptions, SolveStats, SolverKind};
 
@@ -119,8 +120,11 @@ pub const WARM_UP: usize = 1;
 /// ever (with [`RUNNER_UP_WITHIN`], a method twice as expensive is probed again after
 /// about ten increments, and the backoff keeps such probes rare).
 pub const FORGET: f64 = 0.93;
-/// Weight of the newest increment in the moving average of work.
+/// Weight of the newest increment in the moving average of cost.
 pub const EMA: f64 = 0.3;
+/// An increment enters a known average at no more than this multiple of it: one hard
+/// increment (a fallback chain) does not dethrone a method, a run of them does.
+pub const OUTLIER_CAP: f64 = 2.0;
 /// A method other than the cheapest starts an increment (a probe: costs drift with the
 /// problem) after this many increments; the interval doubles each time a probe loses.
 pub const RUNNER_UP_EVERY: usize = 10;
@@ -209,7 +213,7 @@ impl AutoState {
         }
         let w = &mut self.work[i];
         *w = Some(match *w {
-            Some(old) => (1.0 - EMA) * old + EMA * work,
+            Some(old) => (1.0 - EMA) * old + EMA * work.min(OUTLIER_CAP * old),
             None => work,
         });
         if let Some(old) = best.filter(|&b| Some(b) != self.cheapest()) {
@@ -300,8 +304,11 @@ mod tests {
         let at = |k| (12..52).filter(|&i| later[i - 12] == k).collect::<Vec<_>>();
         assert_eq!(at(Newton), [31]);
         assert_eq!(at(Bfgs), [32]);
-        // A method whose increments turn expensive (a fallback's whole chain) is dropped.
-        assert_eq!(drive(&mut s, 2, costs(500.0, 25.0, 26.0)), [Jfnk, Bfgs]);
+        // A method whose increments turn expensive (a fallback's whole chain) is dropped
+        // for one within the 30 % one such increment adds (BFGS at 25 against 20).
+        let picks = drive(&mut s, 3, costs(500.0, 25.0, 26.0));
+        assert_eq!(picks[0], Jfnk);
+        assert!(!picks[1..].contains(&Jfnk), "{picks:?}");
     }
 
     /// A method far behind is probed again only as its excess is forgotten, and less
@@ -318,6 +325,18 @@ mod tests {
                 assert!(w[2] - w[1] >= 2 * (w[1] - w[0]) - 2, "{k:?} at {at:?}");
             }
         }
+    }
+
+    /// One increment at 25 times the average (a fallback chain) raises it by 30 %, not
+    /// 7.2 times: the method keeps its place.
+    #[test]
+    fn one_hard_increment_does_not_dethrone_a_method() {
+        use SolverKind::*;
+        let mut s = AutoState::default();
+        drive(&mut s, 5, costs(20.0, 30.0, 30.0));
+        s.record(Jfnk, 500.0);
+        assert_eq!(s.work[AutoState::index(Jfnk)], Some(26.0));
+        assert_eq!(s.choose(), Jfnk);
     }
 
     /// A probe that wins is taken from then on.
