@@ -52,6 +52,8 @@ enum Command {
         #[arg(short, long, value_name = "DECK")]
         out: Option<PathBuf>,
     },
+    /// Print the deck's JSON Schema (for an editor's completion and checks of TOML decks).
+    Schema,
     /// Write a built-in scene or a deck as an Abaqus/CalculiX input file (.inp) or an
     /// LS-DYNA keyword file (.k), by the extension; what has no equivalent is listed.
     Export {
@@ -213,13 +215,14 @@ impl ContactArg {
 
 /// The subcommand names (an argument that is none of them, nor an option, is a target
 /// to run: `alfe my.toml`).
-const COMMANDS: [&str; 8] = [
+const COMMANDS: [&str; 9] = [
     "run",
     "scenes",
     "scene",
     "check",
     "import",
     "export",
+    "schema",
     "partition",
     "help",
 ];
@@ -348,6 +351,14 @@ fn main_inner(comm: &dyn Comm, raw: Vec<String>) -> Result<()> {
             let r = alfe::parallel::on_rank0(comm, || app::check(&t, ranks as usize, &o))?;
             if let Some(s) = r {
                 print!("{s}");
+            }
+            Ok(())
+        }
+        Command::Schema => {
+            if comm.rank() == 0 {
+                use std::io::Write;
+                // A closed pipe (`alfe schema | head`) is not an error.
+                let _ = writeln!(std::io::stdout(), "{}", app::schema::deck_schema());
             }
             Ok(())
         }

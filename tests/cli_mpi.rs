@@ -1440,8 +1440,9 @@ print(json.dumps({"times": [float(f["steps"][s].attrs["time"]) for s in steps],
 /// bolts, 6 mm in the plate) and with Newton (whose iterations do not depend on the
 /// partition): METIS cuts the bracket/plate joint, so tracked nodes and their reference
 /// faces lie on different ranks. The bolt forces, the bracket's peak stress and the
-/// coupling's displacement agree at every step within the solver's tolerance, and each
-/// bolt carries its 10 kN exactly when it locks.
+/// coupling's displacement agree at every step within 1e-6 of their largest value
+/// (measured: 8e-11 at most, the peak stress), and each bolt carries its 10 kN exactly
+/// when it locks.
 #[test]
 fn bolted_bracket_same_on_one_and_two_ranks() {
     let dir = temp_dir("rank-bracket");
@@ -1486,7 +1487,7 @@ fn bolted_bracket_same_on_one_and_two_ranks() {
         let scale = a.iter().fold(0.0f64, |m, x| m.max(x.abs()));
         for k in 0..a.len() {
             assert!(
-                (a[k] - b[k]).abs() <= 1e-5 * scale,
+                (a[k] - b[k]).abs() <= 1e-6 * scale,
                 "{name} at t = {}: {} vs {}",
                 t[k],
                 a[k],

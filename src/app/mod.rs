@@ -10,6 +10,7 @@ mod observe;
 mod progress;
 mod restart;
 mod run;
+pub mod schema;
 mod summary;
 
 pub use check::{check, check_source, partition};

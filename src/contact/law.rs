@@ -31,7 +31,17 @@ pub struct Branch {
 }
 
 /// Where the friction threshold s comes from.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[derive(
+    Debug,
+    Clone,
+    Copy,
+    PartialEq,
+    Eq,
+    Default,
+    serde::Serialize,
+    serde::Deserialize,
+    schemars::JsonSchema,
+)]
 #[serde(rename_all = "kebab-case")]
 pub enum Threshold {
     /// s = μ max(λ_N − g_N, 0): the augmented normal multiplier (Alart–Curnier, GetFEM's

@@ -77,7 +77,9 @@ impl Pose {
 }
 
 /// Whether a motion curve gives a displacement (angle) or a velocity (angular velocity).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default, schemars::JsonSchema,
+)]
 #[serde(rename_all = "lowercase")]
 pub enum MotionKind {
     #[default]

@@ -60,7 +60,9 @@ impl ShapeDef {
 }
 
 /// How a wall's contact is enforced (DESIGN.md, "Contact: the formulation").
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default, schemars::JsonSchema,
+)]
 #[serde(rename_all = "lowercase")]
 pub enum ContactMethod {
     /// Augmented Lagrangian: multipliers are unknowns, zero penetration at convergence.

@@ -86,7 +86,17 @@ pub trait Preconditioner {
 }
 
 /// Which preconditioner the Krylov solves use (deck `[solver.linear] preconditioner`).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[derive(
+    Debug,
+    Clone,
+    Copy,
+    PartialEq,
+    Eq,
+    Default,
+    serde::Serialize,
+    serde::Deserialize,
+    schemars::JsonSchema,
+)]
 #[serde(rename_all = "kebab-case")]
 pub enum PcKind {
     /// Chosen by size and rank count ([`PcKind::resolve`]): on one rank block Jacobi (the

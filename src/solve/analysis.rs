@@ -4,7 +4,7 @@
 
 use serde::{Deserialize, Serialize};
 
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize, schemars::JsonSchema)]
 #[serde(rename_all = "lowercase")]
 pub enum AnalysisKind {
     /// Load stepping over pseudo-time.
@@ -26,7 +26,7 @@ impl AnalysisKind {
 }
 
 /// Implicit time integration schemes.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize, schemars::JsonSchema)]
 #[serde(rename_all = "kebab-case")]
 pub enum Scheme {
     /// Newmark trapezoidal rule (β = 1/4, γ = 1/2): no numerical damping.
@@ -40,7 +40,7 @@ pub enum Scheme {
 }
 
 /// Mass matrix of implicit dynamics.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize, schemars::JsonSchema)]
 #[serde(rename_all = "lowercase")]
 pub enum MassKind {
     Consistent,
@@ -49,7 +49,9 @@ pub enum MassKind {
 
 /// Where a static step's Newton iterations start (Abaqus/Standard `*STATIC`,
 /// `EXTRAPOLATION=`).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize, Default)]
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize, Default, schemars::JsonSchema,
+)]
 #[serde(rename_all = "lowercase")]
 pub enum Predictor {
     /// From the last converged state extrapolated along the last converged increment,

@@ -9,13 +9,17 @@ use serde::{Deserialize, Deserializer, Serialize};
 /// centroid). Per component x, y, z: `force` and `moment` load free DOFs, `displacement`
 /// and `rotation` (radians) prescribe them; each component is a number (scaling a ramp
 /// 0 → 1 over the analysis) or `{ value, curve }`.
-#[derive(Debug, Clone, Deserialize, Serialize)]
+#[derive(Debug, Clone, Deserialize, Serialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct CouplingDeck {
+    /// The coupling's name (history columns of its reference point).
     pub name: String,
+    /// The coupled nodes: a node set or surface name.
     pub nodes: String,
+    /// How the reference point's load is spread over the nodes: "area" (tributary areas, a surface's default) or "uniform".
     #[serde(default)]
     pub weights: Option<WeightsDeck>,
+    /// The reference point (default: the coupled nodes' centroid).
     #[serde(default)]
     pub point: Option<[f64; 3]>,
     #[serde(default)]
@@ -28,7 +32,7 @@ pub struct CouplingDeck {
     pub rotation: Components,
 }
 
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize, schemars::JsonSchema)]
 #[serde(rename_all = "lowercase")]
 pub enum WeightsDeck {
     /// Tributary areas on a surface.
@@ -37,13 +41,16 @@ pub enum WeightsDeck {
     Uniform,
 }
 
-#[derive(Debug, Clone, Default, Deserialize, Serialize)]
+#[derive(Debug, Clone, Default, Deserialize, Serialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Components {
+    /// Along x: a number, or { value, curve, step }.
     #[serde(default)]
     pub x: Option<Amount>,
+    /// Along y: a number, or { value, curve, step }.
     #[serde(default)]
     pub y: Option<Amount>,
+    /// Along z: a number, or { value, curve, step }.
     #[serde(default)]
     pub z: Option<Amount>,
 }
@@ -61,6 +68,31 @@ pub struct Amount {
     pub value: f64,
     pub curve: Option<String>,
     pub step: Option<String>,
+}
+
+/// The deck schema of an [`Amount`] (its deserializer is written by hand).
+impl schemars::JsonSchema for Amount {
+    fn schema_name() -> std::borrow::Cow<'static, str> {
+        "Amount".into()
+    }
+    fn json_schema(_: &mut schemars::SchemaGenerator) -> schemars::Schema {
+        schemars::json_schema!({
+            "description": "A number, or { value, curve, step }: the value scaled by the named curve, run in the named analysis step's time.",
+            "anyOf": [
+                { "type": "number" },
+                {
+                    "type": "object",
+                    "properties": {
+                        "value": { "type": "number" },
+                        "curve": { "type": "string" },
+                        "step": { "type": "string" }
+                    },
+                    "required": ["value"],
+                    "additionalProperties": false
+                }
+            ]
+        })
+    }
 }
 
 impl<'de> Deserialize<'de> for Amount {

@@ -16,21 +16,28 @@ use serde::{Deserialize, Serialize};
 pub use steps::StepDeck;
 pub use walls::{DofDeck, DofType, SegmentDeck, ShapeKind, TraceDeck, WallDeck, WallMotionDeck};
 
-#[derive(Debug, Clone, Deserialize, Serialize)]
+#[derive(Debug, Clone, Deserialize, Serialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Deck {
     pub scene: SceneInfo,
+    /// Materials, each named for the parts that use it.
     #[serde(default)]
     pub materials: Vec<MaterialDeck>,
+    /// The parts: each a mesh (generated or read from a file) of one material.
     pub parts: Vec<PartDeck>,
+    /// Named node selections (a box, a mesh group, node numbers), optionally within one part.
     #[serde(default)]
     pub node_sets: Vec<NodeSetDeck>,
+    /// Named boundary-face selections (a box or a mesh group), optionally within one part.
     #[serde(default)]
     pub surfaces: Vec<SurfaceDeck>,
+    /// Named piecewise-linear time curves that scale loads and motions.
     #[serde(default)]
     pub curves: Vec<CurveDeck>,
+    /// Supports and prescribed displacements or rotations of node sets.
     #[serde(default)]
     pub boundary: Vec<BoundaryDeck>,
+    /// Nodal forces, pressures and body loads.
     #[serde(default)]
     pub loads: Vec<LoadDeck>,
     pub analysis: AnalysisDeck,
@@ -73,16 +80,18 @@ pub struct Deck {
 /// `[partition]`: `method = "metis"` (default: fewest cut faces) or `"slabs"` with
 /// `axis = "x" | "y" | "z"` (equal slabs of elements along that axis, LS-DYNA's
 /// decomposition along a direction: for steering where the cuts go).
-#[derive(Debug, Clone, Deserialize, Serialize)]
+#[derive(Debug, Clone, Deserialize, Serialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct PartitionDeck {
+    /// "metis" (default) or "slabs" (equal slabs along `axis`).
     pub method: PartitionMethodDeck,
+    /// Slabs: the axis they are cut along ("x", "y" or "z").
     #[serde(default)]
     pub axis: Option<Comp>,
 }
 
 /// `[solver] line_search`: `true`, `false` or `"auto"`.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize, schemars::JsonSchema)]
 #[serde(untagged)]
 pub enum LineSearchDeck {
     Flag(bool),
@@ -90,7 +99,7 @@ pub enum LineSearchDeck {
 }
 
 /// The word form of `line_search`.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize, schemars::JsonSchema)]
 #[serde(rename_all = "lowercase")]
 pub enum LineSearchWord {
     Auto,
@@ -107,7 +116,7 @@ impl LineSearchDeck {
     }
 }
 
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize, schemars::JsonSchema)]
 #[serde(rename_all = "lowercase")]
 pub enum PartitionMethodDeck {
     Metis,
@@ -115,20 +124,25 @@ pub enum PartitionMethodDeck {
 }
 
 /// An initial velocity on a part or a node set (exactly one of `part`, `set`).
-#[derive(Debug, Clone, Deserialize, Serialize)]
+#[derive(Debug, Clone, Deserialize, Serialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct InitialVelocityDeck {
+    /// Every node of this part ...
     #[serde(default)]
     pub part: Option<String>,
+    /// ... or of this node set.
     #[serde(default)]
     pub set: Option<String>,
+    /// The initial velocity [vx, vy, vz] (length / time).
     pub velocity: [f64; 3],
 }
 
-#[derive(Debug, Clone, Deserialize, Serialize)]
+#[derive(Debug, Clone, Deserialize, Serialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct SceneInfo {
+    /// The scene's name: 1–64 letters, digits, `-`, `_`, `.` (it names the result files).
     pub name: String,
+    /// One line on what the scene is.
     #[serde(default)]
     pub description: String,
     /// The consistent unit system every number in the deck is in.
@@ -136,7 +150,7 @@ pub struct SceneInfo {
 }
 
 /// Consistent unit systems (length, mass, time → force, stress, density).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize, schemars::JsonSchema)]
 pub enum Units {
     /// m, kg, s → N, Pa, kg/m³
     #[serde(rename = "m-kg-s")]
@@ -163,7 +177,7 @@ impl Units {
     }
 }
 
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize, schemars::JsonSchema)]
 #[serde(rename_all = "kebab-case")]
 pub enum MaterialModel {
     /// Small-strain isotropic Hooke's law: `E`, `nu`.
@@ -191,10 +205,12 @@ impl MaterialModel {
 
 /// A material. Which fields apply depends on `model`; a field the model does not use
 /// is an error (so a typo in the model name cannot silently drop a parameter).
-#[derive(Debug, Clone, Deserialize, Serialize)]
+#[derive(Debug, Clone, Deserialize, Serialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct MaterialDeck {
+    /// The material's name, for `parts[].material`.
     pub name: String,
+    /// The constitutive model: "linear-elastic", "neo-hookean", "mooney-rivlin" or "j2".
     pub model: MaterialModel,
     /// Young's modulus (stress units): linear-elastic, neo-hookean, j2.
     #[serde(default, rename = "E")]
@@ -204,6 +220,7 @@ pub struct MaterialDeck {
     /// Mooney–Rivlin constants (stress units).
     #[serde(default, rename = "C10")]
     pub c10: Option<f64>,
+    /// Mooney–Rivlin's second constant (stress units; default 0, neo-Hookean).
     #[serde(default, rename = "C01")]
     pub c01: Option<f64>,
     /// Initial yield stress σ_y0 (j2).
@@ -218,7 +235,7 @@ pub struct MaterialDeck {
 }
 
 /// Isotropic hardening of the yield stress with equivalent plastic strain ε̄p.
-#[derive(Debug, Clone, Deserialize, Serialize)]
+#[derive(Debug, Clone, Deserialize, Serialize, schemars::JsonSchema)]
 #[serde(tag = "type", rename_all = "lowercase", deny_unknown_fields)]
 pub enum HardeningDeck {
     /// σ_y = σ_y0 + `modulus` · ε̄p.
@@ -237,7 +254,9 @@ pub enum HardeningDeck {
 
 /// How a part's hex8 elements treat volume change (tet4 has the standard element only:
 /// any other named formulation is an error on a part with tet4).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize, Default)]
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize, Default, schemars::JsonSchema,
+)]
 #[serde(rename_all = "kebab-case")]
 pub enum FormulationDeck {
     /// EAS for a part meshed as a sheet; hybrid where the material is nearly
@@ -260,11 +279,14 @@ pub enum FormulationDeck {
     Hybrid,
 }
 
-#[derive(Debug, Clone, Deserialize, Serialize)]
+#[derive(Debug, Clone, Deserialize, Serialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct PartDeck {
+    /// The part's name (output blocks, selections).
     pub name: String,
+    /// The name of its material (`[[materials]]`).
     pub material: String,
+    /// The mesh: generated (box, extruded-quad, cylinder, ring, blocks), read (gmsh, abaqus, lsdyna, file) or a sheet extruded from a surface mesh.
     pub mesh: MeshDeck,
     /// Volume treatment of hex8 elements (default auto).
     #[serde(default)]
@@ -276,19 +298,24 @@ pub struct PartDeck {
     /// translated. Groups keep their names; selections by box see the placed part.
     #[serde(default)]
     pub rotate: Option<RotateDeck>,
+    /// Translation [x, y, z] applied after `rotate`.
     #[serde(default)]
     pub translate: Option<[f64; 3]>,
 }
 
 /// A rotation by `angle` degrees about `axis` through the origin (right-hand rule).
-#[derive(Debug, Clone, Copy, Deserialize, Serialize)]
+#[derive(Debug, Clone, Copy, Deserialize, Serialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct RotateDeck {
+    /// Rotation axis [x, y, z] through the origin.
     pub axis: [f64; 3],
+    /// Rotation angle in degrees (right hand).
     pub angle: f64,
 }
 
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize, Default)]
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize, Default, schemars::JsonSchema,
+)]
 #[serde(rename_all = "lowercase")]
 pub enum ElementDeck {
     #[default]
@@ -300,7 +327,7 @@ pub enum ElementDeck {
     Wedge6,
 }
 
-#[derive(Debug, Clone, Deserialize, Serialize)]
+#[derive(Debug, Clone, Deserialize, Serialize, schemars::JsonSchema)]
 #[serde(tag = "kind", rename_all = "lowercase", deny_unknown_fields)]
 pub enum MeshDeck {
     /// A generated block; its six sides are groups `xmin`, `xmax`, `ymin`, ... .
@@ -424,7 +451,9 @@ pub enum MeshDeck {
     },
 }
 
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize, Default)]
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize, Default, schemars::JsonSchema,
+)]
 #[serde(rename_all = "kebab-case")]
 pub enum SheetOffsetDeck {
     #[default]
@@ -438,17 +467,23 @@ fn one_usize() -> usize {
 }
 
 /// A slab of a `blocks` lattice, `from` ≤ `axis` ≤ `to`, meshed at its own cell size.
-#[derive(Debug, Clone, Copy, Deserialize, Serialize)]
+#[derive(Debug, Clone, Copy, Deserialize, Serialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct SlabDeck {
+    /// The axis the slab spans ("x", "y" or "z").
     pub axis: Comp,
+    /// The slab's start along `axis`.
     pub from: f64,
+    /// The slab's end along `axis`.
     pub to: f64,
+    /// Largest cell length inside the slab.
     pub cell_size: f64,
 }
 
 /// How much of a generated cylinder: all of it, or the x ≥ 0, y ≥ 0 quadrant.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize, Default)]
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize, Default, schemars::JsonSchema,
+)]
 #[serde(rename_all = "lowercase")]
 pub enum SectorDeck {
     #[default]
@@ -468,20 +503,25 @@ fn ones() -> [f64; 3] {
     [1.0; 3]
 }
 
-#[derive(Debug, Clone, Deserialize, Serialize)]
+#[derive(Debug, Clone, Deserialize, Serialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct BoxSel {
+    /// The box's lowest corner [x, y, z].
     pub min: [f64; 3],
+    /// The box's highest corner [x, y, z].
     pub max: [f64; 3],
 }
 
 /// A node set: exactly one of `box`, `group`, `nodes`; `part` restricts it to a part.
-#[derive(Debug, Clone, Deserialize, Serialize)]
+#[derive(Debug, Clone, Deserialize, Serialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct NodeSetDeck {
+    /// The set's name, for the sections that select nodes.
     pub name: String,
+    /// Select within this part only.
     #[serde(default)]
     pub part: Option<String>,
+    /// Every node inside this box { min, max } (with a tolerance of 1e-9 of the model's size).
     #[serde(default, rename = "box")]
     pub bbox: Option<BoxSel>,
     /// A mesh group: a box side (`xmin`, ...) or a Gmsh physical group name.
@@ -493,28 +533,33 @@ pub struct NodeSetDeck {
 }
 
 /// A surface (boundary faces): exactly one of `box`, `group`; `part` restricts it.
-#[derive(Debug, Clone, Deserialize, Serialize)]
+#[derive(Debug, Clone, Deserialize, Serialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct SurfaceDeck {
+    /// The surface's name, for walls, pairs, pressures and couplings.
     pub name: String,
+    /// Select within this part only.
     #[serde(default)]
     pub part: Option<String>,
+    /// The boundary faces inside this box { min, max }.
     #[serde(default, rename = "box")]
     pub bbox: Option<BoxSel>,
+    /// A mesh group of faces: a box side (`xmin`, ...) or a Gmsh physical group name.
     #[serde(default)]
     pub group: Option<String>,
 }
 
 /// A piecewise-linear time curve, constant beyond its ends.
-#[derive(Debug, Clone, Deserialize, Serialize)]
+#[derive(Debug, Clone, Deserialize, Serialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct CurveDeck {
+    /// The curve's name, for the loads and motions that use it.
     pub name: String,
     /// [[t0, v0], [t1, v1], ...] with strictly increasing t.
     pub points: Vec<[f64; 2]>,
 }
 
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize, schemars::JsonSchema)]
 #[serde(rename_all = "lowercase")]
 pub enum Comp {
     X,
@@ -522,7 +567,7 @@ pub enum Comp {
     Z,
 }
 
-#[derive(Debug, Clone, Deserialize, Serialize)]
+#[derive(Debug, Clone, Deserialize, Serialize, schemars::JsonSchema)]
 #[serde(tag = "type", rename_all = "lowercase", deny_unknown_fields)]
 pub enum BoundaryDeck {
     /// Zero displacement on the listed components (default all three).
@@ -572,7 +617,7 @@ impl BoundaryDeck {
     }
 }
 
-#[derive(Debug, Clone, Deserialize, Serialize)]
+#[derive(Debug, Clone, Deserialize, Serialize, schemars::JsonSchema)]
 #[serde(tag = "type", rename_all = "lowercase", deny_unknown_fields)]
 pub enum LoadDeck {
     /// The same force on every node of a set: `force × curve(t)` per node.
@@ -605,7 +650,7 @@ pub enum LoadDeck {
     },
 }
 
-#[derive(Debug, Clone, Deserialize, Serialize)]
+#[derive(Debug, Clone, Deserialize, Serialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct AnalysisDeck {
     #[serde(rename = "type")]
@@ -647,20 +692,25 @@ pub struct AnalysisDeck {
 /// with f_ref = max(‖f_ext‖, ‖f_int‖) over all unknowns (so reactions count), the last
 /// correction ‖Δu‖ ≤ increment_rtol · ‖u‖, and its energy |Δu·r| ≤ energy_rtol times the
 /// largest correction energy of the step.
-#[derive(Debug, Clone, Deserialize, Serialize)]
+#[derive(Debug, Clone, Deserialize, Serialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct SolverDeck {
+    /// "newton" (default), "bfgs", "jfnk" or "auto" (per increment the cheapest so far, with fallbacks).
     #[serde(default)]
     pub nonlinear: SolverKind,
+    /// Nonlinear iterations before an increment is cut (default 25).
     #[serde(default = "d_max_it")]
     pub max_iterations: usize,
+    /// Relative residual tolerance of convergence (default 1e-8).
     #[serde(default = "d_rrtol")]
     pub residual_rtol: f64,
+    /// Relative correction tolerance of convergence (default 1e-6).
     #[serde(default = "d_urtol")]
     pub increment_rtol: f64,
     /// Last correction's energy |Δu·r| relative to the largest of the step.
     #[serde(default = "d_ertol")]
     pub energy_rtol: f64,
+    /// The linear solves: GMRES and its preconditioner.
     #[serde(default)]
     pub linear: LinearDeck,
     /// Backtracking (Armijo) line search on ‖r_free‖ of Newton and JFNK: `true`, `false`
@@ -719,13 +769,16 @@ impl Default for SolverDeck {
 }
 
 /// GMRES settings (right-preconditioned, so `rtol` bounds the true residual).
-#[derive(Debug, Clone, Deserialize, Serialize)]
+#[derive(Debug, Clone, Deserialize, Serialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct LinearDeck {
+    /// GMRES relative tolerance of Newton's and BFGS's linear solves (JFNK: the floor of its forcing term); default 1e-10.
     #[serde(default = "d_lrtol")]
     pub rtol: f64,
+    /// GMRES restart length (default 60).
     #[serde(default = "d_restart")]
     pub restart: usize,
+    /// GMRES iterations before a linear solve fails (default 2000).
     #[serde(default = "d_lmax")]
     pub max_iterations: usize,
     /// "auto" (default), "auto-factored", "block-jacobi", "asm", "two-level",
@@ -780,7 +833,7 @@ impl Default for LinearDeck {
     }
 }
 
-#[derive(Debug, Clone, Deserialize, Serialize)]
+#[derive(Debug, Clone, Deserialize, Serialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct OutputDeck {
     /// Write fields every n-th converged step (the last step is always written).
@@ -809,24 +862,31 @@ pub struct OutputDeck {
 /// One quantity of interest: `expression` over the history's columns, taken `at` a time or
 /// `over` the run (`last`, the default; `max`, `min`, `max_abs`), with an optional
 /// `reference` and relative `tolerance`.
-#[derive(Debug, Clone, Deserialize, Serialize)]
+#[derive(Debug, Clone, Deserialize, Serialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct QuantityDeck {
+    /// The quantity's name (in summary.json and the study).
     pub name: String,
+    /// What to evaluate: an expression of history columns (e.g. `-upper_pin.fy`).
     pub expression: String,
+    /// Evaluate at this time (default: the end).
     #[serde(default)]
     pub at: Option<f64>,
+    /// Or a reduction over the run: "last", "max", "min" or "max_abs".
     #[serde(default)]
     pub over: Option<OverDeck>,
+    /// The known answer, if any (analytic, published, a peer's).
     #[serde(default)]
     pub reference: Option<f64>,
+    /// Relative tolerance against `reference` (absolute against 0).
     #[serde(default)]
     pub tolerance: Option<f64>,
+    /// What the quantity is, in words (units included).
     #[serde(default)]
     pub description: String,
 }
 
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize, schemars::JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum OverDeck {
     Last,

@@ -24,7 +24,17 @@ pub use context::{Next, NonlinearSolver, Prediction, Solver, SolverContext, Star
 pub use precond::Preconditioning;
 
 /// The three nonlinear solvers (DESIGN.md, "Nonlinear solvers").
-#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize, Default)]
+#[derive(
+    Debug,
+    Clone,
+    Copy,
+    PartialEq,
+    Eq,
+    serde::Serialize,
+    serde::Deserialize,
+    Default,
+    schemars::JsonSchema,
+)]
 #[serde(rename_all = "lowercase")]
 pub enum SolverKind {
     /// Assembled generalized Jacobian at every iteration.
@@ -69,7 +79,17 @@ impl SolverKind {
 }
 
 /// How JFNK picks the finite-difference step ε for J v ≈ (F(u + ε v) − F(u)) / ε.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize, Default)]
+#[derive(
+    Debug,
+    Clone,
+    Copy,
+    PartialEq,
+    Eq,
+    serde::Serialize,
+    serde::Deserialize,
+    Default,
+    schemars::JsonSchema,
+)]
 #[serde(rename_all = "kebab-case")]
 pub enum FdRule {
     /// ε = δ · h / ‖v‖ with h a characteristic element length: the perturbation moves
