@@ -6,6 +6,7 @@
 //! test; an abort kills it. The seed and the number of cases can be set with
 //! `ALFE_FUZZ_SEED` and `ALFE_FUZZ_CASES`; a failure prints the deck that caused it.
 
+mod common;
 use alfe::scene::{Source, BUILTIN};
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::path::PathBuf;
@@ -284,4 +285,58 @@ fn mutated_decks_are_refused_naming_where() {
         refused > cases / 2,
         "the mutations should mostly be refused"
     );
+}
+
+/// The schema against the parser on the fuzzer's decks (issue 38): a deck the parser
+/// takes is never refused by the schema (the schema is no stricter than alfe), and what
+/// the schema lets through that the parser refuses is what only `check` sees (names that
+/// refer to nothing, ranges, sizes): counted and printed. 600 decks, one Python process.
+#[test]
+fn the_schema_refuses_nothing_the_parser_takes() {
+    let mut r = Rng(20_261_128);
+    let dir = common::temp_dir("fuzz-schema");
+    let decks: Vec<Value> = BUILTIN
+        .iter()
+        .map(|(_, _, t)| Value::Table(t.parse::<toml::Table>().unwrap()))
+        .collect();
+    let (mut files, mut parsed) = (Vec::new(), Vec::new());
+    for case in 0..600 {
+        let deck = r.pick(&decks).clone();
+        let text = if r.below(10) < 7 {
+            let mut d = deck.clone();
+            mutate_value(&mut d, &mut r);
+            toml::to_string(&d).unwrap_or_else(|_| String::from("not = [toml"))
+        } else {
+            mutate_text(&toml::to_string(&deck).unwrap(), &mut r)
+        };
+        let src = Source {
+            text: text.clone(),
+            dir: PathBuf::from("."),
+            label: format!("fuzz-{case}"),
+        };
+        let p = dir.join(format!("case-{case}.toml"));
+        std::fs::write(&p, &text).unwrap();
+        files.push(p);
+        parsed.push(alfe::app::check_source(&src, 1, &Default::default()).is_ok());
+    }
+    let verdicts = common::schema_verdicts(&dir, &files);
+    let (mut both_ok, mut both_refuse, mut check_only, mut not_toml) = (0, 0, 0, 0);
+    let mut stricter = Vec::new();
+    for ((f, ok), v) in files.iter().zip(&parsed).zip(&verdicts) {
+        match (ok, v) {
+            (_, Err(e)) if e.starts_with("not TOML") => not_toml += 1,
+            (true, Ok(())) => both_ok += 1,
+            (false, Err(_)) => both_refuse += 1,
+            (false, Ok(())) => check_only += 1,
+            (true, Err(e)) => stricter.push(format!("{}: {e}", f.display())),
+        }
+    }
+    eprintln!(
+        "schema vs parser on 600 fuzzed decks: {both_ok} both accept, {both_refuse} both refuse, {check_only} only check refuses, {not_toml} not TOML to Python"
+    );
+    assert!(
+        stricter.is_empty(),
+        "the schema refuses decks alfe takes: {stricter:#?}"
+    );
+    assert!(both_refuse > 100, "{both_refuse} refused by both");
 }

@@ -3,7 +3,7 @@
 
 use alfe::app::{run, RunOptions, RunOutcome};
 use alfe::parallel::SerialComm;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// A fresh directory for one test.
 pub fn temp_dir(name: &str) -> PathBuf {
@@ -209,4 +209,47 @@ pub fn gmsh_text(
         }
     }
     s + "$EndElements\n"
+}
+
+/// The deck schema's verdict on each deck file (`alfe schema`, checked by Python's
+/// `jsonschema` on the TOML read by `tomllib`): `Ok`, or the first error's message;
+/// `Err("not TOML: ...")` where Python cannot read the file as TOML.
+pub fn schema_verdicts(dir: &Path, decks: &[PathBuf]) -> Vec<Result<(), String>> {
+    let schema = dir.join("deck.schema.json");
+    std::fs::write(&schema, alfe::app::schema::deck_schema()).unwrap();
+    let script = r#"
+import json, sys, tomllib, jsonschema
+schema = json.load(open(sys.argv[1]))
+v = jsonschema.Draft202012Validator(schema)
+for path in sys.argv[2:]:
+    try:
+        deck = tomllib.load(open(path, "rb"))
+    except Exception as e:
+        print(json.dumps(f"not TOML: {e}"))
+        continue
+    errors = sorted(v.iter_errors(deck), key=lambda e: list(e.path))
+    print(json.dumps(None if not errors else f"{list(errors[0].path)}: {errors[0].message}"))
+"#;
+    let out = std::process::Command::new("/usr/bin/python3")
+        .arg("-c")
+        .arg(script)
+        .arg(&schema)
+        .args(decks)
+        .output()
+        .expect("python3");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8(out.stdout)
+        .unwrap()
+        .lines()
+        .map(
+            |l| match serde_json::from_str::<Option<String>>(l).unwrap() {
+                None => Ok(()),
+                Some(e) => Err(e),
+            },
+        )
+        .collect()
 }
