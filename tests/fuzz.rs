@@ -205,6 +205,17 @@ fn mutate_text(text: &str, r: &mut Rng) -> String {
 
 /// Where an error says the mistake is: a deck path (`parts[0].mesh.cells[1]: ...`) or
 /// a TOML line (`... (line 12)`).
+/// A mutation of `deck`: seven in ten change one value, the rest garble its text.
+fn mutated(deck: &Value, r: &mut Rng) -> String {
+    if r.below(10) < 7 {
+        let mut d = deck.clone();
+        mutate_value(&mut d, r);
+        toml::to_string(&d).unwrap_or_else(|_| String::from("not = [toml"))
+    } else {
+        mutate_text(&toml::to_string(deck).unwrap(), r)
+    }
+}
+
 /// `keys` are the decks' top-level keys: a path must begin with one of them.
 fn names_where(msg: &str, keys: &std::collections::BTreeSet<String>) -> bool {
     let body = msg.split_once(": ").map_or(msg, |(_, b)| b);
@@ -244,13 +255,7 @@ fn mutated_decks_are_refused_naming_where() {
         .collect();
     for case in 0..cases {
         let (name, deck) = r.pick(&decks).clone();
-        let text = if r.below(10) < 7 {
-            let mut d = deck.clone();
-            mutate_value(&mut d, &mut r);
-            toml::to_string(&d).unwrap_or_else(|_| String::from("not = [toml"))
-        } else {
-            mutate_text(&toml::to_string(&deck).unwrap(), &mut r)
-        };
+        let text = mutated(&deck, &mut r);
         let src = Source {
             text: text.clone(),
             dir: PathBuf::from("."),
@@ -302,13 +307,7 @@ fn the_schema_refuses_nothing_the_parser_takes() {
     let (mut files, mut parsed) = (Vec::new(), Vec::new());
     for case in 0..600 {
         let deck = r.pick(&decks).clone();
-        let text = if r.below(10) < 7 {
-            let mut d = deck.clone();
-            mutate_value(&mut d, &mut r);
-            toml::to_string(&d).unwrap_or_else(|_| String::from("not = [toml"))
-        } else {
-            mutate_text(&toml::to_string(&deck).unwrap(), &mut r)
-        };
+        let text = mutated(&deck, &mut r);
         let src = Source {
             text: text.clone(),
             dir: PathBuf::from("."),
