@@ -203,8 +203,6 @@ fn mutate_text(text: &str, r: &mut Rng) -> String {
     lines.join("\n") + "\n"
 }
 
-/// Where an error says the mistake is: a deck path (`parts[0].mesh.cells[1]: ...`) or
-/// a TOML line (`... (line 12)`).
 /// A mutation of `deck`: seven in ten change one value, the rest garble its text.
 fn mutated(deck: &Value, r: &mut Rng) -> String {
     if r.below(10) < 7 {
@@ -217,6 +215,8 @@ fn mutated(deck: &Value, r: &mut Rng) -> String {
 }
 
 /// `keys` are the decks' top-level keys: a path must begin with one of them.
+/// Where an error says the mistake is: a deck path (`parts[0].mesh.cells[1]: ...`) or
+/// a TOML line (`... (line 12)`).
 fn names_where(msg: &str, keys: &std::collections::BTreeSet<String>) -> bool {
     let body = msg.split_once(": ").map_or(msg, |(_, b)| b);
     let path_end = body.find(": ").unwrap_or(0);
