@@ -214,9 +214,9 @@ fn mutated(deck: &Value, r: &mut Rng) -> String {
     }
 }
 
-/// `keys` are the decks' top-level keys: a path must begin with one of them.
 /// Where an error says the mistake is: a deck path (`parts[0].mesh.cells[1]: ...`) or
 /// a TOML line (`... (line 12)`).
+/// `keys` are the decks' top-level keys: a path must begin with one of them.
 fn names_where(msg: &str, keys: &std::collections::BTreeSet<String>) -> bool {
     let body = msg.split_once(": ").map_or(msg, |(_, b)| b);
     let path_end = body.find(": ").unwrap_or(0);
