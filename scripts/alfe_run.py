@@ -8,6 +8,7 @@ import json
 import os
 import platform
 import subprocess
+import tomllib
 from datetime import datetime, timezone
 
 # Open MPI refuses to start as root without these (containers and CI run as root).
@@ -54,12 +55,18 @@ def last_error(stderr):
     return (ours or lines)[-1]
 
 
-def run(cmd, ranks=1, timeout=None, oversubscribe=True, environ=None):
+def run(cmd, ranks=1, timeout=None, oversubscribe=True, environ=None, stderr_to=None):
     """Run `cmd` (an `alfe run ...` argument list) on `ranks` ranks: (exit code or None
-    on timeout, last stderr line or the timeout)."""
+    on timeout, last stderr line or the timeout). With `stderr_to` (a file path), a run
+    that fails leaves its whole stderr there: the last line alone may not say enough, and
+    a message must point to a file that is kept."""
     p = run_process(cmd, ranks, timeout, oversubscribe, environ)
     if p is None:
         return None, f"timed out after {timeout:g} s"
+    if stderr_to and p.returncode != 0:
+        os.makedirs(os.path.dirname(stderr_to), exist_ok=True)
+        with open(stderr_to, "w") as f:
+            f.write(p.stderr)
     return p.returncode, last_error(p.stderr)
 
 
@@ -80,6 +87,45 @@ def results(out):
         with open(os.path.join(out, "history.csv")) as f:
             rows = list(csv.DictReader(f))
     return summary(out), rows
+
+
+def force_names(head):
+    """The names of every force triple (`name.fx/.fy/.fz`) among history.csv's columns
+    `head`, in their order: reaction sets, walls, contact entities, pairs, couplings."""
+    return [c[:-3] for c in head
+            if c.endswith(".fx") and f"{c[:-3]}.fy" in head and f"{c[:-3]}.fz" in head]
+
+
+# The deck's unit systems (`[scene] units`) as alfe describes them (summary.json's `units`).
+UNIT_SYSTEMS = {
+    "m-kg-s": "length m, mass kg, time s, force N, stress Pa",
+    "mm-t-s": "length mm, mass t, time s, force N, stress MPa",
+    "mm-kg-ms": "length mm, mass kg, time ms, force kN, stress GPa",
+    "mm-g-ms": "length mm, mass g, time ms, force N, stress MPa",
+}
+
+
+def units(out):
+    """The unit of each kind of number of the run in `out`, {"length": "mm", "time": "s",
+    "force": "N", ...}, so charts can label their axes: from summary.json's `units` (alfe's
+    description, or the deck's short name such as "mm-t-s"), else from the deck.toml alfe
+    copied into `out` (a run killed before its summary); {} where neither says."""
+    text = summary(out).get("units")
+    if not text and os.path.exists(os.path.join(out, "deck.toml")):
+        with open(os.path.join(out, "deck.toml"), "rb") as f:
+            try:
+                text = tomllib.load(f).get("scene", {}).get("units")
+            except tomllib.TOMLDecodeError:
+                text = None
+    return parse_units(text)
+
+
+def parse_units(text):
+    """{"length": "mm", ...} of a unit system's short name ("mm-t-s") or alfe's description
+    of it ("length mm, mass t, time s, force N, stress MPa"); {} for None or anything else."""
+    text = UNIT_SYSTEMS.get((text or "").strip(), text or "")
+    pairs = [p.split() for p in text.split(",")]
+    return {p[0]: p[1] for p in pairs if len(p) == 2}
 
 
 def read_history(path):

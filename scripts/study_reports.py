@@ -205,7 +205,11 @@ def cylinder(runs, out, ctx):
             "retries": summ.get("retries"),
             "wall_s": summ.get("wall_time_s", run.elapsed),
         })
-        print(json.dumps(recs[-1]), flush=True)
+        r = recs[-1]
+        print(f"level {level} ({'×'.join(map(str, r['cells']))}), {r['solver']}, {r['ranks']} "
+              f"rank(s): " + (f"{r['force']:.4f} N/mm in {r['wall_s']:.1f} s" if r["finished"]
+                              else f"stopped at t = {r['end_time']:.4g}: {r['failure']}"),
+              flush=True)
     with open(os.path.join(out, "cylinder-study.json"), "w") as f:
         json.dump(recs, f, indent=1)
     rows, prev = [], {}
@@ -263,7 +267,11 @@ def indent(runs, out, ctx):
             "force": {str(m): _interp(m, xs, fs) for m in marks},
             "curve": [xs, fs],
         })
-        print(json.dumps({k: v for k, v in recs[-1].items() if k != "curve"}), flush=True)
+        r = recs[-1]
+        print(f"{r['run']}: " + (f"finished in {fmt(r['wall_s'], '.1f', '?')} s, "
+                                 f"{r['nonlinear_iterations']} iterations" if r["finished"] else
+                                 f"stopped at {r['reached_mm']:.2f} mm: {r['failure']}"),
+              flush=True)
     with open(os.path.join(out, "indent-study.json"), "w") as f:
         json.dump(recs, f, indent=1)
     rows = [[r["run"], f"{r['reached_mm']:.2f}", r["nonlinear_iterations"], r["linear_iterations"],

@@ -396,8 +396,29 @@ fn a_restarted_penalty_run_keeps_its_elastic_slip() {
     }
 }
 
+/// A panel of forces.png as plots.json describes it: title, x label, y label, x range.
+type Panel = (String, String, String, [f64; 2]);
+
+/// The panels `scripts/plot` drew into `plots/forces.png` of `run` (its plots.json).
+fn force_panels(run: &Path) -> Vec<Panel> {
+    let js: serde_json::Value = serde_json::from_str(&read(&run.join("plots/plots.json"))).unwrap();
+    js["charts"]["forces.png"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|p| {
+            let s = |k: &str| p[k].as_str().unwrap().to_string();
+            let x = |i: usize| p["x_range"][i].as_f64().unwrap();
+            (s("title"), s("xlabel"), s("ylabel"), [x(0), x(1)])
+        })
+        .collect()
+}
+
 /// `scripts/plot RUN_DIR` draws the forces and the convergence of any run (here a deck
-/// of the user's, with its iterations) without code.
+/// of the user's, with its iterations) without code, with the deck's units on the axes;
+/// a wall that moves is drawn against its displacement along each phase of its motion
+/// (the floor at rest, then sliding along +x; the seal's roller pressed 5 mm along −z,
+/// then slid 10 mm along +x, where against `ux` alone the press was a vertical line).
 #[test]
 fn plot_draws_any_run() {
     let dir = scratch("plot");
@@ -407,24 +428,56 @@ fn plot_draws_any_run() {
         1,
         &["mine.toml", "-q", "-o", "r", "--iterations"],
     ));
+    let seal = read(&Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/seal.toml"));
+    let coarse = edit(&seal, "cells = [16, 8, 8]", "cells = [8, 4, 4]");
+    std::fs::write(dir.join("seal.toml"), coarse).unwrap();
+    ok(alfe(&dir, 1, &["seal.toml", "-q", "-o", "s"]));
     let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("scripts/plot");
-    let o = Command::new("/usr/bin/python3")
-        .arg(&script)
-        .arg(dir.join("r"))
-        .output()
-        .expect("cannot run scripts/plot");
-    let (so, se) = text(&o);
-    assert!(o.status.success(), "scripts/plot failed:\n{so}\n{se}");
-    for png in ["forces.png", "convergence.png"] {
-        let p = dir.join("r/plots").join(png);
-        assert!(so.contains(png), "{so}");
-        let bytes = std::fs::read(&p).unwrap_or_else(|e| panic!("{}: {e}", p.display()));
-        assert!(
-            bytes.starts_with(b"\x89PNG") && bytes.len() > 20_000,
-            "{png}: {} bytes",
-            bytes.len()
-        );
+    for run in ["r", "s"] {
+        let o = Command::new("/usr/bin/python3")
+            .arg(&script)
+            .arg(dir.join(run))
+            .output()
+            .expect("cannot run scripts/plot");
+        let (so, se) = text(&o);
+        assert!(o.status.success(), "scripts/plot failed:\n{so}\n{se}");
+        for png in ["forces.png", "convergence.png"] {
+            let p = dir.join(run).join("plots").join(png);
+            assert!(so.contains(png), "{so}");
+            let bytes = std::fs::read(&p).unwrap_or_else(|e| panic!("{}: {e}", p.display()));
+            assert!(
+                bytes.starts_with(b"\x89PNG") && bytes.len() > 20_000,
+                "{png}: {} bytes",
+                bytes.len()
+            );
+        }
     }
+    let js: serde_json::Value =
+        serde_json::from_str(&read(&dir.join("r/plots/plots.json"))).unwrap();
+    assert_eq!(js["charts"]["convergence.png"][0]["xlabel"], "time [s]");
+    let (r, s) = (force_panels(&dir.join("r")), force_panels(&dir.join("s")));
+    assert!(
+        r.iter().chain(&s).all(|p| p.2 == "force [N]"),
+        "{r:?}\n{s:?}"
+    );
+    let range = |panels: &[Panel], title: &str, xlabel: &str| {
+        panels
+            .iter()
+            .find(|p| p.0.starts_with(title) && p.1 == xlabel)
+            .unwrap_or_else(|| panic!("no panel {title} against {xlabel}: {panels:?}"))
+            .3
+    };
+    // Reaction sets against time; the floor at rest while the block is pressed, then
+    // sliding 0.5 mm; the roller pressed 5 mm, then slid 10 mm from where the press ended.
+    range(&r, "top", "time [s]");
+    range(&s, "base", "time [s]");
+    range(&r, "floor at rest", "time [s]");
+    let x = range(&r, "floor moving", "floor displacement along +x [mm]");
+    assert!(x[0].abs() < 1e-9 && (x[1] - 0.5).abs() < 1e-9, "{x:?}");
+    let x = range(&s, "roller moving", "roller displacement along −z [mm]");
+    assert!((x[1] - 5.0).abs() < 1e-9, "{x:?}");
+    let x = range(&s, "roller moving", "roller displacement along +x [mm]");
+    assert!(x[0].abs() < 1e-9 && (x[1] - 10.0).abs() < 1e-9, "{x:?}");
 }
 
 /// An element that inverts on one rank is named by every rank (it used to be "an
