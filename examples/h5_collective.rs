@@ -31,7 +31,7 @@ fn attr(name: &str, center: Center, kind: AttrKind, h5_path: String, n_rows: u64
         h5_path,
         n_rows,
         n_cols: kind.n_cols(),
-        number_type: "Float",
+        number_type: "Float".into(),
         precision: 8,
     }
 }
@@ -77,7 +77,7 @@ fn run(comm: &dyn Comm, dir: &Path) -> alfe::Result<()> {
         n_elems,
         topology: XdmfTopology::Hexahedron,
         static_cell_attrs: vec![XdmfAttr {
-            number_type: "Int",
+            number_type: "Int".into(),
             precision: 4,
             ..attr(
                 "partition",
@@ -87,6 +87,7 @@ fn run(comm: &dyn Comm, dir: &Path) -> alfe::Result<()> {
                 n_elems,
             )
         }],
+        parts: vec![],
     };
     let mut steps = Vec::new();
     for s in 1..=2u64 {
@@ -131,6 +132,7 @@ fn run(comm: &dyn Comm, dir: &Path) -> alfe::Result<()> {
                     n_elems,
                 ),
             ],
+            h5_file: None,
         });
         if rank == 0 {
             write_xdmf(&dir.join("run.xmf"), &mesh, &steps)?;

@@ -703,19 +703,22 @@ print(json.dumps(dict(shapes=shapes, steps=len(steps), fields=fields, times=time
         v["shapes"]["mesh/original_node_id"],
         serde_json::json!([1025])
     );
-    assert_eq!(v["steps"], 10);
+    // The state at t = 0, then the 10 increments.
+    assert_eq!(v["steps"], 11);
     assert_eq!(v["fields"]["displacement"], serde_json::json!([1025, 3]));
     assert_eq!(v["fields"]["stress"], serde_json::json!([640, 6]));
     assert_eq!(v["fields"]["von_mises"], serde_json::json!([640]));
     assert_eq!(v["parts"], serde_json::json!([0, 1]));
     assert_eq!(v["ids_ok"], true);
     assert_eq!(v["times"], v["xtimes"]);
-    assert_eq!(v["times"].as_array().unwrap().len(), 10);
+    assert_eq!(v["times"].as_array().unwrap().len(), 11);
+    assert_eq!(v["times"][0], 0.0);
     assert_eq!(
         v["names"],
         serde_json::json!([
             "displacement",
             "material",
+            "part",
             "partition",
             "stress",
             "von_mises"
@@ -1424,7 +1427,9 @@ print(json.dumps({"times": [float(f["steps"][s].attrs["time"]) for s in steps],
         col(hb, "sphere.pole.y"),
         col(hb, "sphere.pole.z"),
     );
-    for (ts, p) in times.iter().zip(&points) {
+    // The first output step is the state at t = 0, before the history's first row.
+    assert_eq!(times[0], 0.0);
+    for (ts, p) in times.iter().zip(&points).skip(1) {
         let r = t.iter().position(|x| (x - ts).abs() < 1e-12).unwrap();
         let want = [px[r], py[r], pz[r]];
         for c in 0..3 {
@@ -1576,9 +1581,10 @@ fn full_disk_stops_every_rank_with_the_written_steps_readable() {
             se.contains("No space left on device") || se.contains("failed"),
             "tmpfs {size}: {se}"
         );
-        // Readable: the HDF5 file opens and lists its steps (fewer than the run's 10).
+        // Readable: the HDF5 file opens and lists its steps (fewer than the run's 11:
+        // the state at t = 0 and 10 increments).
         let n: usize = steps.unwrap().trim().parse().unwrap();
-        assert!(n < 10, "tmpfs {size}: {n} steps");
+        assert!(n < 11, "tmpfs {size}: {n} steps");
     }
 }
 

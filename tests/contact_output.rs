@@ -173,19 +173,22 @@ for s in f["/steps"]:
         st["points"] = g["walls/floor/points"][:].tolist()
     out["steps"][s] = st
 x = ET.parse(os.path.join(d, sys.argv[2] + ".xmf")).getroot().find("Domain/Grid")
-out["xdmf"] = []
-for g in x.findall("Grid"):
-    step = {"type": [g.get("GridType"), g.get("CollectionType")], "grids": []}
-    for c in g.findall("Grid"):
+out["xdmf"] = {"type": [x.get("GridType"), x.get("CollectionType")], "blocks": []}
+for b in x.findall("Grid"):
+    block = {"name": b.get("Name"), "type": [b.get("GridType"), b.get("CollectionType")],
+             "grids": []}
+    for c in b.findall("Grid"):
         items = []
         for di in c.iter("DataItem"):
+            if di.get("Format") != "HDF":
+                continue
             fname, path = di.text.strip().split(":", 1)
             dims = [int(v) for v in di.get("Dimensions").split()]
             items.append([path, list(f[path].shape) == dims])
-        step["grids"].append({"name": c.get("Name"),
-                              "topology": c.find("Topology").get("TopologyType"),
-                              "items": items})
-    out["xdmf"].append(step)
+        block["grids"].append({"name": c.get("Name"), "time": float(c.find("Time").get("Value")),
+                               "topology": c.find("Topology").get("TopologyType"),
+                               "items": items})
+    out["xdmf"]["blocks"].append(block)
 print(json.dumps(out))
 "#;
 
@@ -306,35 +309,42 @@ fn alm_wall_reactions_fields_and_geometry() {
             .all(|p| (p[2].as_f64().unwrap() + 0.01).abs() < 1e-15));
     }
 
-    // XDMF: per step, the mesh and the wall, every DataItem resolving to its dataset.
-    let xd = j["xdmf"].as_array().unwrap();
-    assert_eq!(xd.len(), 2);
-    for (k, s) in xd.iter().enumerate() {
-        assert_eq!(s["type"], serde_json::json!(["Collection", "Spatial"]));
-        let g = s["grids"].as_array().unwrap();
-        assert_eq!(g.len(), 2);
-        assert_eq!(g[0]["name"], "mesh");
-        assert_eq!(g[0]["topology"], "Hexahedron");
-        assert_eq!(g[1]["name"], "wall_floor");
-        assert_eq!(g[1]["topology"], "Triangle");
-        let paths: Vec<&str> = g
+    // XDMF: a block for the part and one for the wall, each a grid per output step (the
+    // state at t = 0 first), every DataItem resolving to its dataset.
+    let xd = &j["xdmf"];
+    assert_eq!(xd["type"], serde_json::json!(["Collection", "Spatial"]));
+    let blocks = xd["blocks"].as_array().unwrap();
+    assert_eq!(blocks.len(), 2);
+    assert_eq!(blocks[1]["name"], "wall_floor");
+    for (b, topology) in blocks.iter().zip(["Hexahedron", "Triangle"]) {
+        assert_eq!(b["type"], serde_json::json!(["Collection", "Temporal"]));
+        let grids = b["grids"].as_array().unwrap();
+        assert_eq!(grids.len(), 3);
+        for (k, g) in grids.iter().enumerate() {
+            assert_eq!(g["name"], b["name"]);
+            assert_eq!(g["topology"], topology);
+            assert_eq!(g["time"].as_f64().unwrap(), [0.0, 0.5, 1.0][k]);
+        }
+    }
+    for k in 0..3 {
+        let paths: Vec<&str> = blocks
             .iter()
-            .flat_map(|x| x["items"].as_array().unwrap())
+            .flat_map(|b| b["grids"][k]["items"].as_array().unwrap())
             .map(|it| {
                 assert_eq!(it[1], true, "{it}");
                 it[0].as_str().unwrap()
             })
             .collect();
-        let step = format!("/steps/{:06}", k + 1);
+        let step = format!("/steps/{k:06}");
         for p in [
             "contact_gap",
             "contact_pressure",
             "contact_force",
             "contact_lambda",
+            "walls/floor/points",
         ] {
             assert!(paths.contains(&format!("{step}/{p}").as_str()), "{paths:?}");
         }
-        assert!(paths.contains(&format!("{step}/walls/floor/points").as_str()));
     }
 }
 
@@ -410,10 +420,7 @@ fn no_walls_no_contact_output() {
         "{s}"
     );
     let xmf = std::fs::read_to_string(out.join("cube-stretch.xmf")).unwrap();
-    assert!(
-        !xmf.contains("Spatial") && !xmf.contains("contact_"),
-        "{xmf}"
-    );
+    assert!(!xmf.contains("wall_") && !xmf.contains("contact_"), "{xmf}");
     let j = python_json(READ, &[out.to_str().unwrap(), "cube-stretch"]);
     assert_eq!(j["has_walls"], false);
     assert_eq!(

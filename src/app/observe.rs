@@ -67,6 +67,25 @@ impl Observer<'_> {
         Ok(flow)
     }
 
+    /// The state before the first increment of a run that starts at t = 0 (not a
+    /// restart): output step 0, fields only ([`ResultsWriter::initial_state`]).
+    pub fn initial(&mut self, u: &[f64], m: &Model) -> Result<()> {
+        let rec = StepRecord {
+            failed: Vec::new(),
+            step: 0,
+            time: 0.0,
+            stage: 0,
+            stats: Default::default(),
+            retries: 0,
+            reactions: Vec::new(),
+            wall_seconds: 0.0,
+            displacements: Vec::new(),
+            energies: None,
+            columns: m.column_values(self.comm, u, 0.0),
+        };
+        self.writer.initial_state(self.comm, &rec, u, m)
+    }
+
     /// The attempts at a converged step, its failed ones first (`iterations.csv`).
     fn attempts(&mut self, rec: &StepRecord) {
         let ok = Attempt {

@@ -414,6 +414,12 @@ fn analyze(
     let resume = restart.as_ref().map(|r| &r.resume);
     if analysis.kind == AnalysisKind::Static {
         let mut u = restart.as_ref().map(|r| r.u.clone()).unwrap_or_default();
+        if restart.is_none() {
+            u.resize(model.n_owned_dofs(), 0.0);
+            if let Err(e) = obs.initial(&u, model) {
+                return (Err(e), u);
+            }
+        }
         let t = run_static(
             comm,
             model,
@@ -532,6 +538,14 @@ fn earlier_history(
     restart: &Option<Restart>,
     log: &mut Log,
 ) -> Result<Vec<Vec<f64>>> {
+    if let Some(why) = restart
+        .as_ref()
+        .and_then(|r| writer.carry_steps(comm, &r.dir, r.time))
+    {
+        log.line(&format!(
+            "warning: {why}; the .xmf begins at the restart (the earlier run's .xmf has the steps before it)"
+        ));
+    }
     Ok(match restart {
         Some(r) => match writer.carry_history(comm, &r.dir, r.step)? {
             Ok(rows) => rows,

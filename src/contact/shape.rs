@@ -25,7 +25,7 @@ pub struct Projection {
     pub hessian: [[f64; 3]; 3],
 }
 
-/// A rigid surface in its own frame (DESIGN.md "Contact: the formulation": rigid walls are
+/// A rigid surface in its own frame (docs/src/design.md "Contact: the formulation": rigid walls are
 /// plane, finite plane, cylinder, sphere, prism, ellipsoid, torus).
 pub trait Shape: std::fmt::Debug + Send + Sync {
     /// Projection of local point x; None where the shape cannot be touched from x (beyond a finite plane's edges, beyond a cylinder's ends).
@@ -272,22 +272,29 @@ impl Shape for Cylinder {
         })
     }
 
-    /// Lateral surface only (the caps are not contact surfaces): AROUND quads, 1 along.
+    /// The lateral surface (AROUND quads, 1 along) closed by two capping fans, so that
+    /// a viewer draws a solid roller, not a tube to look into. The caps are drawn only:
+    /// contact is with the lateral surface ([`Shape::project`] is `None` past the ends).
     fn surface(&self) -> (Vec<[f64; 3]>, Vec<[usize; 3]>) {
         let (r, hz) = (self.radius, 0.5 * self.length);
-        let mut v = Vec::with_capacity(2 * AROUND);
+        let mut v = Vec::with_capacity(2 * AROUND + 2);
         for z in [-hz, hz] {
             for k in 0..AROUND {
                 let th = std::f64::consts::TAU * k as f64 / AROUND as f64;
                 v.push([r * th.cos(), r * th.sin(), z]);
             }
         }
-        let mut t = Vec::with_capacity(2 * AROUND);
+        let (bottom, top) = (2 * AROUND, 2 * AROUND + 1);
+        v.push([0.0, 0.0, -hz]);
+        v.push([0.0, 0.0, hz]);
+        let mut t = Vec::with_capacity(4 * AROUND);
         for i in 0..AROUND {
             let j = (i + 1) % AROUND;
             let (b0, b1, t0, t1) = (i, j, AROUND + i, AROUND + j);
             t.push([b0, b1, t1]);
             t.push([b0, t1, t0]);
+            t.push([bottom, b1, b0]);
+            t.push([top, t0, t1]);
         }
         (v, t)
     }
@@ -472,23 +479,27 @@ impl Shape for Prism {
         })
     }
 
-    /// Six faces with their own four vertices each (flat shading in viewers).
+    /// The eight corners and two triangles per face: a closed surface (a viewer's
+    /// feature edges find no boundary; without normals it shades each face flat).
     fn surface(&self) -> (Vec<[f64; 3]>, Vec<[usize; 3]>) {
         let h = self.half();
-        let mut v = Vec::with_capacity(24);
+        // Corner k has the sign of h[a] from bit a of k.
+        let v: Vec<[f64; 3]> = (0..8)
+            .map(|k| std::array::from_fn(|a| if k >> a & 1 == 1 { h[a] } else { -h[a] }))
+            .collect();
         let mut t = Vec::with_capacity(12);
         for a in 0..3 {
-            for s in [1.0, -1.0] {
-                let (n, [t1, t2]) = face_frame(a, s);
-                let c = scale(h[a], n);
-                let (u, w) = (h[(a + 1) % 3], h[(a + 2) % 3]);
-                let base = v.len();
-                // Counter-clockwise in (t1, t2), and t1 × t2 = n: outward.
-                for (p, q) in [(-u, -w), (u, -w), (u, w), (-u, w)] {
-                    v.push(std::array::from_fn(|i| c[i] + p * t1[i] + q * t2[i]));
+            let (b, c) = ((a + 1) % 3, (a + 2) % 3);
+            for s in [0, 1] {
+                // The face x_a = ±h_a, its corners counter-clockwise in (e_b, e_c): that
+                // turns outward on the + side; the − side takes them the other way.
+                let corner = |ib: usize, ic: usize| (s << a) | (ib << b) | (ic << c);
+                let mut q = [corner(0, 0), corner(1, 0), corner(1, 1), corner(0, 1)];
+                if s == 0 {
+                    q.reverse();
                 }
-                t.push([base, base + 1, base + 2]);
-                t.push([base, base + 2, base + 3]);
+                t.push([q[0], q[1], q[2]]);
+                t.push([q[0], q[2], q[3]]);
             }
         }
         (v, t)
@@ -1165,21 +1176,31 @@ mod tests {
 
     /// Vertices on the surface (g ≈ 0), triangles valid and facing the shape normal at
     /// their centroid, and the total area, which catches missing or doubled triangles.
-    fn check_surface(shape: &dyn Shape, area: f64, area_tol: f64) {
+    /// The drawn surface lies on the shape and faces outward; its contact part (the
+    /// triangles whose centroid projects) has area `area`; a `volume` given, the surface
+    /// is closed as a viewer sees it (every edge, by its vertex indices, in two
+    /// triangles) and
+    /// encloses that volume (the divergence theorem: positive when it faces outward).
+    fn check_surface(shape: &dyn Shape, area: f64, area_tol: f64, volume: Option<f64>) {
         let (v, t) = shape.surface();
         let kind = shape.kind();
         assert!(!t.is_empty(), "{kind}: empty surface");
         for x in &v {
-            let p = shape
-                .project(*x)
-                .unwrap_or_else(|| panic!("{kind}: vertex {x:?}"));
-            assert!(
-                p.gap.abs() < 1e-12,
-                "{kind}: vertex {x:?} has gap {}",
-                p.gap
-            );
+            match shape.project(*x) {
+                Some(p) => assert!(
+                    p.gap.abs() < 1e-12,
+                    "{kind}: vertex {x:?} has gap {}",
+                    p.gap
+                ),
+                // A cylinder's cap centres are on its axis, where it has no normal.
+                None => assert!(
+                    kind == "cylinder" && x[0] == 0.0 && x[1] == 0.0,
+                    "{kind}: {x:?}"
+                ),
+            }
         }
-        let mut total = 0.0;
+        let (mut total, mut enclosed) = (0.0, 0.0);
+        let mut edges = std::collections::BTreeMap::<[usize; 2], usize>::new();
         for tri in &t {
             assert!(
                 tri.iter().all(|&i| i < v.len()),
@@ -1187,8 +1208,16 @@ mod tests {
             );
             let [a, b, c] = tri.map(|i| v[i]);
             let an = cross(sub(b, a), sub(c, a));
+            enclosed += dot(a, an) / 6.0;
+            for (p, q) in [(tri[0], tri[1]), (tri[1], tri[2]), (tri[2], tri[0])] {
+                *edges.entry([p.min(q), p.max(q)]).or_default() += 1;
+            }
             let centroid = scale(1.0 / 3.0, add(add(a, b), c));
-            let n = shape.project(centroid).expect("centroid projects").normal;
+            // A drawn-only cap's centroid is off the contact surface (or has no projection).
+            let on = |p: &Projection| p.gap.abs() < 0.1 * norm(sub(b, a)).max(norm(sub(c, a)));
+            let Some(n) = shape.project(centroid).filter(on).map(|p| p.normal) else {
+                continue;
+            };
             assert!(
                 dot(an, n) > 0.99 * norm(an),
                 "{kind}: triangle {tri:?} faces {an:?}, shape normal {n:?}"
@@ -1199,6 +1228,14 @@ mod tests {
             (total - area).abs() <= area_tol * area,
             "{kind}: area {total} vs {area}"
         );
+        if let Some(vol) = volume {
+            let open = edges.values().filter(|&&k| k != 2).count();
+            assert_eq!(open, 0, "{kind}: {open} edges not in exactly two triangles");
+            assert!(
+                (enclosed - vol).abs() <= 2.0 * area_tol * vol,
+                "{kind}: encloses {enclosed}, the solid is {vol}"
+            );
+        }
     }
 
     #[test]
@@ -1211,8 +1248,9 @@ mod tests {
             },
             9.0,
             1e-14,
+            None,
         );
-        check_surface(&FinitePlane { lx: 2.0, ly: 3.0 }, 6.0, 1e-14);
+        check_surface(&FinitePlane { lx: 2.0, ly: 3.0 }, 6.0, 1e-14, None);
         let (r, l) = (0.7, 2.5);
         check_surface(
             &Cylinder {
@@ -1221,21 +1259,34 @@ mod tests {
             },
             2.0 * PI * r * l,
             5e-3,
+            Some(PI * r * r * l),
         );
-        check_surface(&Sphere { radius: 1.3 }, 4.0 * PI * 1.3 * 1.3, 1e-2);
+        let r = 1.3;
+        check_surface(
+            &Sphere { radius: r },
+            4.0 * PI * r * r,
+            1e-2,
+            Some(4.0 / 3.0 * PI * r * r * r),
+        );
         check_surface(
             &Prism {
                 size: [1.0, 2.0, 3.0],
             },
             2.0 * (2.0 + 6.0 + 3.0),
             1e-14,
+            Some(6.0),
         );
         // Knud Thomsen's approximation of the ellipsoid's area (within about 1 %).
         let (a, b, c) = (2.0f64, 1.5f64, 1.0f64);
         let p = 1.6075;
         let thomsen =
             4.0 * PI * (((a * b).powf(p) + (a * c).powf(p) + (b * c).powf(p)) / 3.0).powf(1.0 / p);
-        check_surface(&Ellipsoid { radii: [a, b, c] }, thomsen, 2e-2);
+        check_surface(
+            &Ellipsoid { radii: [a, b, c] },
+            thomsen,
+            2e-2,
+            Some(4.0 / 3.0 * PI * a * b * c),
+        );
         check_surface(
             &Torus {
                 radius: 2.0,
@@ -1243,6 +1294,7 @@ mod tests {
             },
             4.0 * PI * PI * 2.0 * 0.5,
             1e-2,
+            Some(2.0 * PI * PI * 2.0 * 0.5 * 0.5),
         );
     }
 

@@ -1,7 +1,7 @@
 //! Split a [`ModelDef`] into per-rank [`LocalModel`]s (on rank 0, from an element
 //! partition) and send each rank its piece. Nodes are renumbered rank by rank so that
 //! every rank owns one contiguous range of global node numbers; elements likewise
-//! (DESIGN.md, "Distributed conventions"). A rank's ghost nodes are those of its
+//! (docs/src/design.md, "Distributed conventions"). A rank's ghost nodes are those of its
 //! elements and of the contribution stencils it evaluates; each contribution
 //! definition localizes itself ([`super::kind::ContributionKind::localize`]).
 
@@ -26,6 +26,9 @@ pub struct LocalModel {
     /// Parts whose largest von Mises stress is a history column: (name, part index).
     #[serde(default)]
     pub peak_stress_parts: Vec<(String, u32)>,
+    /// The parts' names, in deck order (the output's blocks).
+    #[serde(default)]
+    pub part_names: Vec<String>,
     pub initial_velocity: Vec<(String, [f64; 3])>,
     /// Every contribution definition, localized to this rank (the same list, in the same
     /// order, on every rank).
@@ -169,6 +172,7 @@ pub fn split(def: &ModelDef, part: &[u32], ranks: usize) -> Vec<LocalModel> {
             reaction_sets: def.reaction_sets.clone(),
             displacement_sets: def.displacement_sets.clone(),
             peak_stress_parts: def.peak_stress_parts.clone(),
+            part_names: def.part_names.clone(),
             initial_velocity: def.initial_velocity.clone(),
             contributions,
         });

@@ -98,10 +98,12 @@ impl Model {
             displacement_sets,
             initial_velocity,
             peak_stress_parts,
+            part_names,
             ..
         } = local;
         let mut solids = Solids::new(elements, &materials);
         solids.peak_stress_parts = peak_stress_parts;
+        solids.part_names = part_names;
         let mut unknowns = vec![solids.unknowns()];
         unknowns.extend(contributions.iter().map(|c| c.unknowns()));
         let dofs = DofMap::new(comm, &mesh.owned_nodes_per_rank, &mesh.ghosts, &unknowns);

@@ -33,6 +33,8 @@ pub struct Solids {
     pub evaluations: u64,
     /// Parts whose largest element von Mises stress is a column `<part>.max_von_mises`.
     pub peak_stress_parts: Vec<(String, u32)>,
+    /// The parts' names (deck order; `elements.part` indexes them): the output's blocks.
+    pub part_names: Vec<String>,
     /// The distinct element kernels of this rank ([`crate::fem::element::kernel`] of
     /// each kind and formulation), and each element's index into them.
     kernels: Vec<Box<dyn ElementKernel>>,
@@ -95,6 +97,7 @@ impl Solids {
             state_new: vec![0.0; s],
             evaluations: 0,
             peak_stress_parts: Vec::new(),
+            part_names: Vec::new(),
             kernels,
             kernel_of,
             own_index,

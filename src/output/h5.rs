@@ -113,7 +113,7 @@ impl Drop for Handle {
 }
 
 /// Element types that can be written as dataset rows.
-trait H5Elem: Copy {
+pub trait H5Elem: Copy {
     const NAME: &'static str;
     fn mem_type() -> hid_t;
     fn file_type() -> hid_t;
@@ -465,7 +465,22 @@ impl H5File {
         row0: u64,
         data: &[T],
     ) -> Result<()> {
-        let r = self.write_rows_here(path, n_rows, n_cols, row0, data);
+        let rows = (data.len() as u64).checked_div(n_cols).unwrap_or(0);
+        self.write_row_blocks(path, n_rows, n_cols, &[(row0, rows)], data)
+    }
+
+    /// Collective: as [`H5File::write_rows_f64`], but this rank's rows go to several
+    /// blocks `(row0, rows)` of the dataset, in order (`data` holds them one after the
+    /// other): a rank's elements of each part where the file keeps parts contiguous.
+    pub fn write_row_blocks<T: H5Elem>(
+        &self,
+        path: &str,
+        n_rows: u64,
+        n_cols: u64,
+        blocks: &[(u64, u64)],
+        data: &[T],
+    ) -> Result<()> {
+        let r = self.write_rows_here(path, n_rows, n_cols, blocks, data);
         self.agreed(&format!("dataset '{path}'"), r)
     }
 
@@ -474,7 +489,7 @@ impl H5File {
         path: &str,
         n_rows: u64,
         n_cols: u64,
-        row0: u64,
+        blocks: &[(u64, u64)],
         data: &[T],
     ) -> Result<()> {
         let _g = hdf5_sys::LOCK.lock();
@@ -488,10 +503,18 @@ impl H5File {
                 "{} values are not whole rows of {n_cols}",
                 data.len()
             ))
-        } else if local_rows > 0 && row0.checked_add(local_rows).is_none_or(|e| e > n_rows) {
+        } else if blocks.iter().map(|b| b.1).sum::<u64>() != local_rows {
+            Some(format!(
+                "{local_rows} rows of data for blocks of {} rows",
+                blocks.iter().map(|b| b.1).sum::<u64>()
+            ))
+        } else if let Some((row0, rows)) = blocks
+            .iter()
+            .find(|&&(r0, k)| k > 0 && r0.checked_add(k).is_none_or(|e| e > n_rows))
+        {
             Some(format!(
                 "rows {row0}..{} outside 0..{n_rows}",
-                row0.saturating_add(local_rows)
+                row0.saturating_add(*rows)
             ))
         } else if path.is_empty() || path.contains('\0') {
             Some(format!("bad dataset path {path:?}"))
@@ -557,21 +580,26 @@ impl H5File {
                     return Err(self.err(ds("H5Sselect_none")));
                 }
             } else {
-                let start: [hsize_t; 2] = [row0, 0];
-                let count: [hsize_t; 2] = [local_rows, n_cols];
-                if H5Sselect_hyperslab(
-                    fspace.id,
-                    H5S_seloper_t::H5S_SELECT_SET,
-                    start.as_ptr(),
-                    std::ptr::null(),
-                    count.as_ptr(),
-                    std::ptr::null(),
-                ) < 0
-                {
-                    return Err(self.err(ds(&format!(
-                        "H5Sselect_hyperslab(rows {row0}..{})",
-                        row0 + local_rows
-                    ))));
+                if H5Sselect_none(fspace.id) < 0 {
+                    return Err(self.err(ds("H5Sselect_none")));
+                }
+                for &(row0, rows) in blocks.iter().filter(|b| b.1 > 0) {
+                    let start: [hsize_t; 2] = [row0, 0];
+                    let count: [hsize_t; 2] = [rows, n_cols];
+                    if H5Sselect_hyperslab(
+                        fspace.id,
+                        H5S_seloper_t::H5S_SELECT_OR,
+                        start.as_ptr(),
+                        std::ptr::null(),
+                        count.as_ptr(),
+                        std::ptr::null(),
+                    ) < 0
+                    {
+                        return Err(self.err(ds(&format!(
+                            "H5Sselect_hyperslab(rows {row0}..{})",
+                            row0 + rows
+                        ))));
+                    }
                 }
             }
             // A rank with no rows still calls H5Dwrite (collective); its buffer is never read.
@@ -581,7 +609,7 @@ impl H5File {
                 data.as_ptr() as *const c_void
             };
             if H5Dwrite(dset.id, T::mem_type(), mspace.id, fspace.id, self.dxpl, buf) < 0 {
-                return Err(self.err(ds(&format!("H5Dwrite(rows {row0}..{})", row0 + local_rows))));
+                return Err(self.err(ds(&format!("H5Dwrite({local_rows} rows)"))));
             }
             if self.comm.is_some() {
                 let mut mode: c_int = -1;

@@ -1,6 +1,7 @@
 //! Output: one HDF5 file per run written collectively by all ranks ([`h5`]), and the
 //! XDMF3 description beside it that ParaView opens as a time series ([`xdmf`]).
 
+pub mod cells;
 pub mod checkpoint;
 pub mod h5;
 pub mod iterations;

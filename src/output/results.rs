@@ -4,6 +4,7 @@
 //! ParaView, rewritten after each step so an interrupted run stays readable),
 //! `DIR/history.csv` (one row per converged step) and `DIR/summary.json`.
 
+use super::cells::CellRows;
 use super::h5::H5File;
 use super::xdmf::{
     write_xdmf_with_grids, AttrKind, Center, GridAt, XdmfAttr, XdmfGrid, XdmfMesh, XdmfStep,
@@ -46,11 +47,39 @@ pub struct ResultsWriter {
     n_nodes: u64,
     n_elems: u64,
     node_start: u64,
-    elem_start: u64,
+    /// Where this rank's elements go in the cell datasets.
+    cells: CellRows,
     /// Owned node dofs: the displacement part of an owned unknown vector.
     n_node_dofs: usize,
+    /// Output steps carried from the run this one restarts (at the front of `steps`).
+    carried: usize,
     pub seconds: f64,
     pub bytes_written: u64,
+}
+
+/// What the `.xmf` is written from, kept beside the restart files (`restart/xdmf.json`)
+/// so that a restarted run's `.xmf` covers the earlier run's steps too.
+#[derive(serde::Serialize, serde::Deserialize)]
+struct XdmfIndex {
+    h5_file: String,
+    steps: Vec<XdmfStep>,
+    grids: Vec<(String, Vec<GridAt>)>,
+}
+
+/// `to` relative to directory `from` (both made absolute), e.g. `../run/scene.h5`.
+fn relative(from: &Path, to: &Path) -> Option<PathBuf> {
+    let (from, to) = (from.canonicalize().ok()?, to.canonicalize().ok()?);
+    let common = from
+        .components()
+        .zip(to.components())
+        .take_while(|(a, b)| a == b)
+        .count();
+    let mut out = PathBuf::new();
+    for _ in from.components().skip(common) {
+        out.push("..");
+    }
+    out.extend(to.components().skip(common));
+    Some(out)
 }
 
 /// HDF5 group paths of the grids: each `/`-separated component of the names the
@@ -221,33 +250,47 @@ pub(crate) fn history_row(rec: &StepRecord, staged: bool, counts: &[bool]) -> St
     row
 }
 
-/// Collective: `/mesh`: coordinates, original ids, connectivity, partition and
-/// material; returns the XDMF topology and the bytes of coordinates written.
-fn write_mesh(comm: &dyn Comm, h5: &H5File, model: &Model) -> Result<(XdmfTopology, u64)> {
+/// Collective: `/mesh`: coordinates, original ids, connectivity, partition, material
+/// and part (cell rows in `cells`' order); returns the XDMF topology and the bytes of
+/// coordinates written.
+fn write_mesh(
+    comm: &dyn Comm,
+    h5: &H5File,
+    model: &Model,
+    cells: &CellRows,
+) -> Result<(XdmfTopology, u64)> {
     let l = &model.mesh;
     let el = &model.solids.elements;
     let n_nodes = l.n_nodes_global as u64;
     let n_elems = l.n_elems_global as u64;
     let node_start = l.node_start() as u64;
-    let elem_start = l.elem_start() as u64;
     let coords: Vec<f64> = l.coords[..l.n_owned()].iter().flatten().copied().collect();
     h5.write_rows_f64("/mesh/coordinates", n_nodes, 3, node_start, &coords)?;
     let orig_n: Vec<i64> = l.orig_node.iter().map(|&n| n as i64).collect();
     h5.write_rows_i64("/mesh/original_node_id", n_nodes, 1, node_start, &orig_n)?;
-    let topology = write_connectivity(comm, h5, model)?;
+    let topology = write_connectivity(comm, h5, model, cells)?;
     let part: Vec<i32> = vec![comm.rank() as i32; el.len()];
-    h5.write_rows_i32("/mesh/partition", n_elems, 1, elem_start, &part)?;
+    cells.write(h5, "/mesh/partition", n_elems, 1, &part)?;
     let mat: Vec<i32> = el.material.iter().map(|&m| m as i32).collect();
-    h5.write_rows_i32("/mesh/material", n_elems, 1, elem_start, &mat)?;
+    cells.write(h5, "/mesh/material", n_elems, 1, &mat)?;
+    let parts: Vec<i32> = (0..el.len())
+        .map(|e| el.part.get(e).map_or(0, |&p| p as i32))
+        .collect();
+    cells.write(h5, "/mesh/part", n_elems, 1, &parts)?;
     let orig_e: Vec<i64> = el.orig.iter().map(|&e| e as i64).collect();
-    h5.write_rows_i64("/mesh/original_element_id", n_elems, 1, elem_start, &orig_e)?;
+    cells.write(h5, "/mesh/original_element_id", n_elems, 1, &orig_e)?;
     Ok((topology, 8 * coords.len() as u64))
 }
 
-/// Collective: `/mesh/connectivity` in global (rank-contiguous) node numbers: one row
-/// per element where all elements are of one kind, else XDMF mixed (`[type, nodes...]`
-/// per element, offsets by exclusive scan).
-fn write_connectivity(comm: &dyn Comm, h5: &H5File, model: &Model) -> Result<XdmfTopology> {
+/// Collective: `/mesh/connectivity` in global (rank-contiguous) node numbers, cells in
+/// `cells`' order: one row per element where all elements are of one kind, else XDMF
+/// mixed (`[type, nodes...]` per element).
+fn write_connectivity(
+    comm: &dyn Comm,
+    h5: &H5File,
+    model: &Model,
+    cells: &CellRows,
+) -> Result<XdmfTopology> {
     let l = &model.mesh;
     let el = &model.solids.elements;
     // Which kinds are present anywhere: hex8, tet4, tet10, wedge6.
@@ -275,7 +318,7 @@ fn write_connectivity(comm: &dyn Comm, h5: &H5File, model: &Model) -> Result<Xdm
     // Wedges go out as a mixed array (no uniform wedge topology here).
     if kinds.iter().filter(|&&k| k > 0.0).count() > 1 || kinds[3] > 0.0 {
         let mut mixed = Vec::new();
-        for e in 0..el.len() {
+        for &e in cells.order() {
             mixed.push(match el.kinds[e] {
                 ElemKind::Hex8 => 9,
                 ElemKind::Tet4 => 6,
@@ -284,8 +327,8 @@ fn write_connectivity(comm: &dyn Comm, h5: &H5File, model: &Model) -> Result<Xdm
             });
             mixed.extend(out_nodes(e));
         }
-        let (before, total) = comm.exclusive_scan(mixed.len() as u64);
-        h5.write_rows_i64("/mesh/connectivity", total, 1, before, &mixed)?;
+        let (_, total) = comm.exclusive_scan(mixed.len() as u64);
+        cells.write_entries(h5, "/mesh/connectivity", total, &mixed)?;
         return Ok(XdmfTopology::Mixed { n_entries: total });
     }
     let npe = if kinds[2] > 0.0 {
@@ -296,8 +339,13 @@ fn write_connectivity(comm: &dyn Comm, h5: &H5File, model: &Model) -> Result<Xdm
         8
     };
     let conn: Vec<i64> = (0..el.len()).flat_map(out_nodes).collect();
-    let (n_elems, start) = (l.n_elems_global as u64, l.elem_start() as u64);
-    h5.write_rows_i64("/mesh/connectivity", n_elems, npe, start, &conn)?;
+    cells.write(
+        h5,
+        "/mesh/connectivity",
+        l.n_elems_global as u64,
+        npe,
+        &conn,
+    )?;
     Ok(if npe == 10 {
         XdmfTopology::Tetrahedron10
     } else if npe == 4 {
@@ -331,6 +379,15 @@ fn write_grids(
         h5.write_rows_i64(&path, g.cells.len() as u64, width as u64, 0, &flat)?;
         for (k, v) in &g.attrs {
             h5.write_attr_str(&format!("/{group}"), k, v)?;
+        }
+        // Its ParaView block names (the grid's, and its path's where it draws one).
+        h5.write_attr_str(&format!("/{group}"), "block", &g.label)?;
+        if g.paths {
+            h5.write_attr_str(
+                &format!("/{group}"),
+                "path_block",
+                &format!("{}_path", g.label),
+            )?;
         }
         bytes += 8 * flat.len() as u64;
         xgrids.push(XdmfGrid {
@@ -386,13 +443,17 @@ impl ResultsWriter {
         let n_nodes = l.n_nodes_global as u64;
         let n_elems = l.n_elems_global as u64;
         let node_start = l.node_start() as u64;
-        let elem_start = l.elem_start() as u64;
+        let cells = CellRows::new(comm, model);
         let mut bytes = 0u64;
         h5.write_attr_str("/", "scene", scene)?;
         h5.write_attr_str("/", "units", units)?;
         h5.write_attr_str("/", "alfe_version", env!("CARGO_PKG_VERSION"))?;
         h5.create_group("/mesh")?;
-        let (topology, mesh_bytes) = write_mesh(comm, &h5, model)?;
+        let (topology, mesh_bytes) = write_mesh(comm, &h5, model, &cells)?;
+        // The part names (`/mesh/part` indexes them; ParaView's blocks are named so).
+        let names: Vec<&str> = cells.parts.iter().map(|p| p.name.as_str()).collect();
+        let names = serde_json::to_string(&names).map_err(|e| Error::runtime(e.to_string()))?;
+        h5.write_attr_str("/mesh", "part_names", &names)?;
         let (grids, xgrids, grid_bytes) = write_grids(comm, &h5, model)?;
         bytes += mesh_bytes + grid_bytes;
         h5.create_group("/steps")?;
@@ -404,7 +465,7 @@ impl ResultsWriter {
             h5_path: path.into(),
             n_rows: n_elems,
             n_cols: 1,
-            number_type: "Int",
+            number_type: "Int".into(),
             precision: 4,
         };
         let xmesh = XdmfMesh {
@@ -415,7 +476,9 @@ impl ResultsWriter {
             static_cell_attrs: vec![
                 cell_i32("partition", "/mesh/partition"),
                 cell_i32("material", "/mesh/material"),
+                cell_i32("part", "/mesh/part"),
             ],
+            parts: cells.parts.clone(),
         };
         let xmf_path = dir.join(format!("{scene}.xmf"));
         let columns: Vec<String> = model.columns().iter().map(|c| c.name.clone()).collect();
@@ -455,7 +518,8 @@ impl ResultsWriter {
             n_nodes,
             n_elems,
             node_start,
-            elem_start,
+            cells,
+            carried: 0,
             n_node_dofs: model.n_node_dofs(),
             seconds: 0.0,
             bytes_written: 0,
@@ -558,6 +622,40 @@ impl ResultsWriter {
         };
         rank0_outcome(comm, r)?;
         if fields {
+            self.fields(comm, rec, u, model, nodal)?;
+        }
+        self.seconds += t0.elapsed().as_secs_f64();
+        Ok(())
+    }
+
+    /// Collective: the state before the first increment (`u` zero, time `rec.time`) as
+    /// output step `/steps/000000`: fields and geometry, no history row (the history
+    /// holds converged steps). ParaView then shows the undeformed model and the walls
+    /// where they start.
+    pub fn initial_state(
+        &mut self,
+        comm: &dyn Comm,
+        rec: &StepRecord,
+        u: &[f64],
+        model: &Model,
+    ) -> Result<()> {
+        let t0 = std::time::Instant::now();
+        self.fields(comm, rec, u, model, &[])?;
+        self.seconds += t0.elapsed().as_secs_f64();
+        Ok(())
+    }
+
+    /// Collective: step `rec`'s displacement, the model's fields and its moving geometry
+    /// under `/steps/NNNNNN`, then the `.xmf` again with this step.
+    fn fields(
+        &mut self,
+        comm: &dyn Comm,
+        rec: &StepRecord,
+        u: &[f64],
+        model: &Model,
+        nodal: &[(&str, &[f64])],
+    ) -> Result<()> {
+        {
             let g = format!("/steps/{:06}", rec.step);
             self.h5.create_group(&g)?;
             self.h5.write_attr_f64(&g, "time", rec.time)?;
@@ -569,7 +667,7 @@ impl ResultsWriter {
                     h5_path: format!("{g}/{name}"),
                     n_rows,
                     n_cols,
-                    number_type: "Float",
+                    number_type: "Float".into(),
                     precision: 8,
                 };
             let mut attrs = Vec::new();
@@ -588,23 +686,24 @@ impl ResultsWriter {
                 attrs.push(attr(name, Center::Node, AttrKind::Vector, self.n_nodes, 3));
             }
             for f in model.fields(comm, u, rec.time) {
-                let (center, n_rows, start) = match f.spec.center {
-                    FieldCenter::Node => (Center::Node, self.n_nodes, self.node_start),
-                    FieldCenter::Cell => (Center::Cell, self.n_elems, self.elem_start),
-                };
                 let kind = match f.spec.width {
                     1 => AttrKind::Scalar,
                     3 => AttrKind::Vector,
                     _ => AttrKind::Tensor6,
                 };
-                let cols = kind.n_cols();
-                self.h5.write_rows_f64(
-                    &format!("{g}/{}", f.spec.name),
-                    n_rows,
-                    cols,
-                    start,
-                    &f.values,
-                )?;
+                let (cols, path) = (kind.n_cols(), format!("{g}/{}", f.spec.name));
+                let (center, n_rows) = match f.spec.center {
+                    FieldCenter::Node => {
+                        let (n, start) = (self.n_nodes, self.node_start);
+                        self.h5.write_rows_f64(&path, n, cols, start, &f.values)?;
+                        (Center::Node, n)
+                    }
+                    FieldCenter::Cell => {
+                        let n = self.n_elems;
+                        self.cells.write(&self.h5, &path, n, cols, &f.values)?;
+                        (Center::Cell, n)
+                    }
+                };
                 self.bytes_written += 8 * f.values.len() as u64;
                 attrs.push(attr(&f.spec.name, center, kind, n_rows, cols));
             }
@@ -635,7 +734,7 @@ impl ResultsWriter {
                             &self.h5,
                             &format!("{g}/{}/path", gr.group),
                             gr.n_points,
-                            self.xgrids[*i].steps.len() + 1,
+                            self.xgrids[*i].steps.len() - self.carried + 1,
                             so_far,
                             if rank0 { &pts } else { &[] },
                             rank0,
@@ -650,16 +749,105 @@ impl ResultsWriter {
             self.steps.push(XdmfStep {
                 time: rec.time,
                 attrs,
+                h5_file: None,
             });
             let r = if comm.rank() == 0 {
                 write_xdmf_with_grids(&self.xmf_path, &self.xmesh, &self.steps, &self.xgrids)
+                    .and_then(|_| self.write_index())
             } else {
                 Ok(())
             };
             rank0_outcome(comm, r)?;
         }
-        self.seconds += t0.elapsed().as_secs_f64();
         Ok(())
+    }
+
+    /// `restart/xdmf.json` beside the `.xmf` (rank 0).
+    fn write_index(&self) -> Result<()> {
+        let index = XdmfIndex {
+            h5_file: self.xmesh.h5_file_name.clone(),
+            steps: self.steps.clone(),
+            grids: self
+                .xgrids
+                .iter()
+                .map(|g| (g.name.clone(), g.steps.clone()))
+                .collect(),
+        };
+        let dir = self.xmf_path.with_file_name("restart");
+        let text = serde_json::to_string(&index).map_err(|e| Error::runtime(e.to_string()))?;
+        std::fs::create_dir_all(&dir)
+            .and_then(|_| std::fs::write(dir.join("xdmf.json"), text))
+            .map_err(|e| Error::runtime(format!("cannot write {}/xdmf.json: {e}", dir.display())))
+    }
+
+    /// Collective: a restarted run's `.xmf` begins with the output steps of the run in
+    /// `dir` up to time `t` (read from its `restart/xdmf.json`, its HDF5 file referred
+    /// to by a relative path), so that ParaView shows the whole run from one file. Every
+    /// rank reads the index (as it reads its restart file) and all carry it or none.
+    /// Returns why none were carried, if so (the run goes on either way).
+    pub fn carry_steps(&mut self, comm: &dyn Comm, dir: &Path, t: f64) -> Option<String> {
+        let loaded = self.earlier_steps(dir, t);
+        let mut failed = [loaded.is_err() as u64];
+        comm.allreduce_max_u64(&mut failed);
+        let (mut steps, grids) = match loaded {
+            Ok(l) if failed[0] == 0 => l,
+            Ok(_) => return Some("another rank cannot read the earlier run's steps".into()),
+            Err(why) => return Some(why),
+        };
+        for (g, at) in self.xgrids.iter_mut().zip(grids) {
+            g.steps.splice(0..0, at);
+        }
+        self.carried = steps.len();
+        steps.append(&mut self.steps);
+        self.steps = steps;
+        let r = if comm.rank() == 0 {
+            write_xdmf_with_grids(&self.xmf_path, &self.xmesh, &self.steps, &self.xgrids)
+        } else {
+            Ok(())
+        };
+        rank0_outcome(comm, r).err().map(|e| e.to_string())
+    }
+
+    /// The output steps of the run in `dir` up to time `t` and its grids at them, the
+    /// steps' HDF5 files relative to this run's directory.
+    #[allow(clippy::type_complexity)]
+    fn earlier_steps(
+        &self,
+        dir: &Path,
+        t: f64,
+    ) -> std::result::Result<(Vec<XdmfStep>, Vec<Vec<GridAt>>), String> {
+        let here = self.xmf_path.parent().unwrap_or(Path::new("."));
+        let path = dir.join("restart").join("xdmf.json");
+        let index: XdmfIndex = std::fs::read_to_string(&path)
+            .map_err(|e| e.to_string())
+            .and_then(|t| serde_json::from_str(&t).map_err(|e| e.to_string()))
+            .map_err(|e| format!("cannot read {}: {e}", path.display()))?;
+        let keep = index
+            .steps
+            .iter()
+            .take_while(|s| s.time <= t * (1.0 + 1e-12))
+            .count();
+        let names: Vec<&String> = index.grids.iter().map(|g| &g.0).collect();
+        if names != self.xgrids.iter().map(|g| &g.name).collect::<Vec<_>>()
+            || index.grids.iter().any(|g| g.1.len() < keep)
+        {
+            return Err(format!("{} has other walls or entities", path.display()));
+        }
+        let mut steps = Vec::with_capacity(keep);
+        for s in &index.steps[..keep] {
+            let file = dir.join(s.h5_file.as_deref().unwrap_or(&index.h5_file));
+            let rel = relative(here, &file).ok_or(format!("cannot find {}", file.display()))?;
+            steps.push(XdmfStep {
+                h5_file: Some(rel.to_string_lossy().into_owned()),
+                ..s.clone()
+            });
+        }
+        let grids = index
+            .grids
+            .into_iter()
+            .map(|g| g.1[..keep].to_vec())
+            .collect();
+        Ok((steps, grids))
     }
 
     pub fn n_field_steps(&self) -> usize {

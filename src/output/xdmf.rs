@@ -1,10 +1,11 @@
-//! The XDMF3 text file beside the HDF5 file: what ParaView opens (`Xdmf3ReaderS`).
+//! The XDMF3 text file beside the HDF5 file: what ParaView opens (its "XDMF Reader"
+//! names the blocks after the parts and walls; see [`xdmf_text_with_grids`]).
 //!
-//! One temporal collection, one uniform grid per output step. Every grid repeats the
-//! Geometry and Topology `DataItem`s, pointing at the same HDF5 datasets: the data
-//! live once on disk (the XDMF only references them), and plain repetition is read by
-//! every XDMF reader, where `xpointer` references are not (DESIGN: robustness over a
-//! few hundred bytes of text per step).
+//! One spatial collection of blocks, each a temporal collection of one uniform grid per
+//! output step. Every grid repeats the Geometry and Topology `DataItem`s, pointing at
+//! the same HDF5 datasets: the data live once on disk (the XDMF only references them),
+//! and plain repetition is read by every XDMF reader, where `xpointer` references are
+//! not (robustness over a few hundred bytes of text per step).
 //!
 //! Datasets the mesh part refers to, by convention (see [`COORDINATES`],
 //! [`CONNECTIVITY`]): `/mesh/coordinates`, f64 `(n_nodes, 3)`, and
@@ -13,6 +14,7 @@
 //! [`XDMF_HEXAHEDRON`] or [`XDMF_TETRAHEDRON`], then its node ids). Node ids are 0-based.
 
 use crate::{Error, Result};
+use serde::{Deserialize, Serialize};
 use std::fmt::Write as _;
 use std::io::Write as _;
 use std::path::Path;
@@ -29,7 +31,7 @@ pub const XDMF_TETRAHEDRON: i64 = 6;
 /// Its midside nodes are in VTK's order: edges 0-1, 1-2, 2-0, 0-3, 1-3, 2-3.
 pub const XDMF_TETRAHEDRON_10: i64 = 38;
 
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 pub enum Center {
     Node,
     Cell,
@@ -43,7 +45,7 @@ pub enum Center {
 /// Declared `Tensor6` (XDMF's own symmetric tensor, whose order is xx, xy, xz, yy, yz, zz),
 /// the Xdmf3 readers did the same but the legacy "XDMF Reader" expanded the columns into a
 /// wrong 3x3 tensor. scripts/check-paraview checks the names in every reader.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 pub enum AttrKind {
     Scalar,
     Vector,
@@ -69,7 +71,7 @@ impl AttrKind {
 }
 
 /// One attribute of a grid: a dataset of `n_rows` rows (nodes or cells) of `n_cols`.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct XdmfAttr {
     pub name: String,
     pub center: Center,
@@ -79,15 +81,28 @@ pub struct XdmfAttr {
     pub n_rows: u64,
     pub n_cols: u64,
     /// "Float" (precision 8) or "Int" (precision 4 or 8).
-    pub number_type: &'static str,
+    pub number_type: String,
     pub precision: u8,
 }
 
 /// One output step: its time and its attributes.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct XdmfStep {
     pub time: f64,
     pub attrs: Vec<XdmfAttr>,
+    /// The HDF5 file of this step, relative to the `.xmf`, where it is not the mesh's
+    /// (a restarted run's steps before the restart are in the earlier run's file).
+    pub h5_file: Option<String>,
+}
+
+/// A part of the mesh: ParaView's block of that name. Its cells are the rows
+/// `cells.0 .. cells.0 + cells.1` of every cell dataset (and, in a mixed connectivity,
+/// the entries `entries.0 ..` of `entries.1`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct XdmfPart {
+    pub name: String,
+    pub cells: (u64, u64),
+    pub entries: (u64, u64),
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -111,6 +126,8 @@ pub struct XdmfMesh {
     pub topology: XdmfTopology,
     /// Cell attributes written in every grid (e.g. the partition id).
     pub static_cell_attrs: Vec<XdmfAttr>,
+    /// The parts, in file order; none: one block `mesh` of every cell.
+    pub parts: Vec<XdmfPart>,
 }
 
 /// Escape text for an XML attribute value or element content.
@@ -175,7 +192,7 @@ fn check_attr(mesh: &XdmfMesh, a: &XdmfAttr) -> Result<()> {
     if a.n_cols != a.kind.n_cols() {
         return bad(format!("{} columns for a {}", a.n_cols, a.kind.xdmf()));
     }
-    match (a.number_type, a.precision) {
+    match (a.number_type.as_str(), a.precision) {
         ("Float", 4 | 8) | ("Int", 4 | 8) | ("UInt", 4 | 8) => {}
         (t, p) => return bad(format!("number type {t} precision {p}")),
     }
@@ -183,30 +200,6 @@ fn check_attr(mesh: &XdmfMesh, a: &XdmfAttr) -> Result<()> {
         return bad(format!("empty name or relative HDF5 path {:?}", a.h5_path));
     }
     Ok(())
-}
-
-/// One attribute, indented by `pad` more than a grid directly in the time series.
-fn attribute(out: &mut String, pad: &str, h5: &str, a: &XdmfAttr) {
-    let center = match a.center {
-        Center::Node => "Node",
-        Center::Cell => "Cell",
-    };
-    let _ = writeln!(
-        out,
-        "{pad}        <Attribute Name=\"{}\" AttributeType=\"{}\" Center=\"{center}\">",
-        esc(&a.name),
-        a.kind.xdmf()
-    );
-    data_item(
-        out,
-        &format!("{pad}          "),
-        h5,
-        &a.h5_path,
-        &dims(a.n_rows, a.n_cols),
-        a.number_type,
-        a.precision,
-    );
-    let _ = writeln!(out, "{pad}        </Attribute>");
 }
 
 /// Moving geometry drawn beside the mesh (a rigid wall's surface, a reference point, a
@@ -225,7 +218,7 @@ pub struct XdmfGrid {
 
 /// An [`XdmfGrid`] at one step: HDF5 paths of its points, f64 `(n_points, 3)`, and of
 /// its cells, i64 `(n_cells, nodes_per_cell)`, 0-based into the points.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct GridAt {
     pub points: String,
     pub n_points: u64,
@@ -238,67 +231,192 @@ pub fn xdmf_text(mesh: &XdmfMesh, steps: &[XdmfStep]) -> Result<String> {
     xdmf_text_with_grids(mesh, steps, &[])
 }
 
-/// The mesh grid of one step, indented by `pad` more than a grid directly in the time
-/// series; `time` is written inside it when given.
-fn mesh_grid(
+/// A block's rows of a dataset: the whole dataset, or (where the mesh has several parts)
+/// the part's rows `[start, start + count)` of it, as an XDMF hyperslab.
+#[derive(Clone, Copy)]
+struct Rows {
+    start: u64,
+    count: u64,
+    /// Rows of the whole dataset; `count == total` means the whole of it.
+    total: u64,
+}
+
+impl Rows {
+    fn all(total: u64) -> Self {
+        Rows {
+            start: 0,
+            count: total,
+            total,
+        }
+    }
+}
+
+/// A DataItem for `rows` of the `n_cols`-column dataset `path` of file `h5`.
+#[allow(clippy::too_many_arguments)]
+fn data_rows(
     out: &mut String,
-    pad: &str,
-    name: &str,
-    time: Option<f64>,
-    mesh: &XdmfMesh,
-    s: &XdmfStep,
+    indent: &str,
+    h5: &str,
+    path: &str,
+    rows: Rows,
+    n_cols: u64,
+    number_type: &str,
+    precision: u8,
 ) {
-    let h5 = mesh.h5_file_name.as_str();
-    let (topo_type, topo_dims) = match mesh.topology {
-        XdmfTopology::Hexahedron => ("Hexahedron", dims(mesh.n_elems, 8)),
-        XdmfTopology::Tetrahedron => ("Tetrahedron", dims(mesh.n_elems, 4)),
-        XdmfTopology::Tetrahedron10 => ("Tetrahedron_10", dims(mesh.n_elems, 10)),
-        XdmfTopology::Mixed { n_entries } => ("Mixed", dims(n_entries, 1)),
+    if rows.count == rows.total {
+        let d = dims(rows.total, n_cols);
+        return data_item(out, indent, h5, path, &d, number_type, precision);
+    }
+    let (sel_dims, sel) = if n_cols == 1 {
+        ("3 1", format!("{} 1 {}", rows.start, rows.count))
+    } else {
+        (
+            "3 2",
+            format!("{} 0 1 1 {} {n_cols}", rows.start, rows.count),
+        )
     };
-    let inner = format!("{pad}          ");
     let _ = writeln!(
         out,
-        "{pad}      <Grid Name=\"{}\" GridType=\"Uniform\">",
-        esc(name)
+        "{indent}<DataItem ItemType=\"HyperSlab\" Type=\"HyperSlab\" Dimensions=\"{}\" \
+         NumberType=\"{number_type}\" Precision=\"{precision}\">",
+        dims(rows.count, n_cols)
     );
-    if let Some(t) = time {
-        let _ = writeln!(out, "{pad}        <Time Value=\"{t:?}\"/>");
-    }
-    let _ = writeln!(out, "{pad}        <Geometry GeometryType=\"XYZ\">");
+    let _ = writeln!(
+        out,
+        "{indent}  <DataItem Dimensions=\"{sel_dims}\" Format=\"XML\">{sel}</DataItem>"
+    );
+    let whole = dims(rows.total, n_cols);
     data_item(
         out,
-        &inner,
+        &format!("{indent}  "),
+        h5,
+        path,
+        &whole,
+        number_type,
+        precision,
+    );
+    let _ = writeln!(out, "{indent}</DataItem>");
+}
+
+/// One attribute of a block; cell attributes take the block's `cells` rows.
+fn block_attribute(out: &mut String, h5: &str, cells: Rows, a: &XdmfAttr) {
+    let center = match a.center {
+        Center::Node => "Node",
+        Center::Cell => "Cell",
+    };
+    let _ = writeln!(
+        out,
+        "        <Attribute Name=\"{}\" AttributeType=\"{}\" Center=\"{center}\">",
+        esc(&a.name),
+        a.kind.xdmf()
+    );
+    let rows = match a.center {
+        Center::Node => Rows::all(a.n_rows),
+        Center::Cell => cells,
+    };
+    let ind = "          ";
+    data_rows(
+        out,
+        ind,
+        h5,
+        &a.h5_path,
+        rows,
+        a.n_cols,
+        &a.number_type,
+        a.precision,
+    );
+    let _ = writeln!(out, "        </Attribute>");
+}
+
+/// Part `p`'s grid at step `s`: every node (the coordinates and node fields are whole
+/// datasets), the part's cells and their rows of the cell fields.
+fn part_grid(out: &mut String, mesh: &XdmfMesh, part: &XdmfPart, s: &XdmfStep) {
+    let h5 = s.h5_file.as_deref().unwrap_or(&mesh.h5_file_name);
+    let whole = mesh.parts.len() <= 1;
+    let cells = if whole {
+        Rows::all(mesh.n_elems)
+    } else {
+        Rows {
+            start: part.cells.0,
+            count: part.cells.1,
+            total: mesh.n_elems,
+        }
+    };
+    let ind = "          ";
+    let _ = writeln!(
+        out,
+        "      <Grid Name=\"{}\" GridType=\"Uniform\">",
+        esc(&part.name)
+    );
+    let _ = writeln!(out, "        <Time Value=\"{:?}\"/>", s.time);
+    out.push_str("        <Geometry GeometryType=\"XYZ\">\n");
+    data_item(
+        out,
+        ind,
         h5,
         COORDINATES,
         &dims(mesh.n_nodes, 3),
         "Float",
         8,
     );
-    let _ = writeln!(out, "{pad}        </Geometry>");
+    out.push_str("        </Geometry>\n");
+    let (topo_type, topo_rows, cols) = match mesh.topology {
+        XdmfTopology::Hexahedron => ("Hexahedron", cells, 8),
+        XdmfTopology::Tetrahedron => ("Tetrahedron", cells, 4),
+        XdmfTopology::Tetrahedron10 => ("Tetrahedron_10", cells, 10),
+        XdmfTopology::Mixed { n_entries } if whole => ("Mixed", Rows::all(n_entries), 1),
+        XdmfTopology::Mixed { n_entries } => (
+            "Mixed",
+            Rows {
+                start: part.entries.0,
+                count: part.entries.1,
+                total: n_entries,
+            },
+            1,
+        ),
+    };
     let _ = writeln!(
         out,
-        "{pad}        <Topology TopologyType=\"{topo_type}\" NumberOfElements=\"{}\">",
-        mesh.n_elems
+        "        <Topology TopologyType=\"{topo_type}\" NumberOfElements=\"{}\">",
+        cells.count
     );
-    data_item(out, &inner, h5, CONNECTIVITY, &topo_dims, "Int", 8);
-    let _ = writeln!(out, "{pad}        </Topology>");
-    for a in &mesh.static_cell_attrs {
-        attribute(out, pad, h5, a);
+    data_rows(out, ind, h5, CONNECTIVITY, topo_rows, cols, "Int", 8);
+    out.push_str("        </Topology>\n");
+    for a in mesh.static_cell_attrs.iter().chain(&s.attrs) {
+        block_attribute(out, h5, cells, a);
     }
-    for a in &s.attrs {
-        attribute(out, pad, h5, a);
-    }
-    let _ = writeln!(out, "{pad}      </Grid>");
+    out.push_str("      </Grid>\n");
 }
 
-/// [`xdmf_text`] with moving geometry: each step becomes a spatial collection of the
-/// mesh grid and one grid per [`XdmfGrid`] at that step's position. Without grids the
-/// document is exactly [`xdmf_text`]'s (one uniform grid per step).
-pub fn xdmf_text_with_grids(
-    mesh: &XdmfMesh,
-    steps: &[XdmfStep],
-    grids: &[XdmfGrid],
-) -> Result<String> {
+/// Grid `w` (a wall's surface, a traced point) at step `i`.
+fn moving_grid(out: &mut String, mesh: &XdmfMesh, w: &XdmfGrid, i: usize, s: &XdmfStep) {
+    let h5 = s.h5_file.as_deref().unwrap_or(&mesh.h5_file_name);
+    let at = &w.steps[i];
+    let ind = "          ";
+    let _ = writeln!(
+        out,
+        "      <Grid Name=\"{}\" GridType=\"Uniform\">",
+        esc(&w.name)
+    );
+    let _ = writeln!(out, "        <Time Value=\"{:?}\"/>", s.time);
+    let topology = match w.nodes_per_cell {
+        3 => "TopologyType=\"Triangle\"",
+        2 => "TopologyType=\"Polyline\" NodesPerElement=\"2\"",
+        _ => "TopologyType=\"Polyvertex\" NodesPerElement=\"1\"",
+    };
+    let _ = writeln!(
+        out,
+        "        <Topology {topology} NumberOfElements=\"{}\">",
+        at.n_cells
+    );
+    let cells = dims(at.n_cells, w.nodes_per_cell);
+    data_item(out, ind, h5, &at.cells, &cells, "Int", 8);
+    out.push_str("        </Topology>\n        <Geometry GeometryType=\"XYZ\">\n");
+    data_item(out, ind, h5, &at.points, &dims(at.n_points, 3), "Float", 8);
+    out.push_str("        </Geometry>\n      </Grid>\n");
+}
+
+fn check_grids(mesh: &XdmfMesh, steps: &[XdmfStep], grids: &[XdmfGrid]) -> Result<()> {
     for a in mesh
         .static_cell_attrs
         .iter()
@@ -310,6 +428,13 @@ pub fn xdmf_text_with_grids(
         return Err(Error::runtime(format!(
             "XDMF: step time {} is not finite",
             s.time
+        )));
+    }
+    let covered: u64 = mesh.parts.iter().map(|p| p.cells.1).sum();
+    if mesh.parts.len() > 1 && covered != mesh.n_elems {
+        return Err(Error::runtime(format!(
+            "XDMF: the parts have {covered} cells, the mesh {}",
+            mesh.n_elems
         )));
     }
     for w in grids {
@@ -333,70 +458,64 @@ pub fn xdmf_text_with_grids(
             )));
         }
     }
-    let h5 = mesh.h5_file_name.as_str();
+    Ok(())
+}
+
+/// The document: one spatial collection of blocks, each block (a part, a wall, an
+/// entity, a traced point) a temporal collection of its grids at the output steps.
+///
+/// Blocks over time, not time over blocks: ParaView's "XDMF Reader" then names every
+/// block after its collection (the part or wall name) at every step. (Time over blocks,
+/// alfe's earlier layout, made the Xdmf3 readers rename each step's grids uniquely
+/// across the file, `mesh[20]`; the Xdmf3 readers leave collections unnamed in either
+/// layout, and read a part's rows of a cell field only when the model has one part, so
+/// the manual's ParaView chapter names "XDMF Reader".) A part's block holds every node
+/// (unused ones are not drawn) and its own cells: the file keeps each part's cells
+/// contiguous, so that a block is a hyperslab of each cell dataset, written once.
+pub fn xdmf_text_with_grids(
+    mesh: &XdmfMesh,
+    steps: &[XdmfStep],
+    grids: &[XdmfGrid],
+) -> Result<String> {
+    check_grids(mesh, steps, grids)?;
     let mut out = String::new();
     out.push_str("<?xml version=\"1.0\" encoding=\"utf-8\"?>\n");
     out.push_str("<!DOCTYPE Xdmf SYSTEM \"Xdmf.dtd\" []>\n");
     out.push_str("<Xdmf xmlns:xi=\"http://www.w3.org/2001/XInclude\" Version=\"3.0\">\n");
     out.push_str("  <Domain>\n");
-    out.push_str(
-        "    <Grid Name=\"TimeSeries\" GridType=\"Collection\" CollectionType=\"Temporal\">\n",
-    );
-    for (i, s) in steps.iter().enumerate() {
-        let name = format!("step_{i:06}");
-        if grids.is_empty() {
-            mesh_grid(&mut out, "", &name, Some(s.time), mesh, s);
-            continue;
-        }
+    out.push_str("  <Grid Name=\"model\" GridType=\"Collection\" CollectionType=\"Spatial\">\n");
+    let whole = [XdmfPart {
+        name: "mesh".into(),
+        cells: (0, mesh.n_elems),
+        entries: (0, 0),
+    }];
+    let parts = if mesh.parts.is_empty() {
+        &whole[..]
+    } else {
+        &mesh.parts[..]
+    };
+    let collection = |out: &mut String, name: &str| {
         let _ = writeln!(
             out,
-            "      <Grid Name=\"{name}\" GridType=\"Collection\" CollectionType=\"Spatial\">"
+            "    <Grid Name=\"{}\" GridType=\"Collection\" CollectionType=\"Temporal\">",
+            esc(name)
         );
-        let _ = writeln!(out, "        <Time Value=\"{:?}\"/>", s.time);
-        mesh_grid(&mut out, "  ", "mesh", None, mesh, s);
-        for w in grids {
-            let at = &w.steps[i];
-            let _ = writeln!(
-                out,
-                "        <Grid Name=\"{}\" GridType=\"Uniform\">",
-                esc(&w.name)
-            );
-            let topology = match w.nodes_per_cell {
-                3 => "TopologyType=\"Triangle\"",
-                2 => "TopologyType=\"Polyline\" NodesPerElement=\"2\"",
-                _ => "TopologyType=\"Polyvertex\" NodesPerElement=\"1\"",
-            };
-            let _ = writeln!(
-                out,
-                "          <Topology {topology} NumberOfElements=\"{}\">",
-                at.n_cells
-            );
-            data_item(
-                &mut out,
-                "            ",
-                h5,
-                &at.cells,
-                &dims(at.n_cells, w.nodes_per_cell),
-                "Int",
-                8,
-            );
-            out.push_str("          </Topology>\n");
-            out.push_str("          <Geometry GeometryType=\"XYZ\">\n");
-            data_item(
-                &mut out,
-                "            ",
-                h5,
-                &at.points,
-                &dims(at.n_points, 3),
-                "Float",
-                8,
-            );
-            out.push_str("          </Geometry>\n");
-            out.push_str("        </Grid>\n");
+    };
+    for part in parts.iter().filter(|p| p.cells.1 > 0) {
+        collection(&mut out, &part.name);
+        for s in steps {
+            part_grid(&mut out, mesh, part, s);
         }
-        out.push_str("      </Grid>\n");
+        out.push_str("    </Grid>\n");
     }
-    out.push_str("    </Grid>\n  </Domain>\n</Xdmf>\n");
+    for w in grids {
+        collection(&mut out, &w.name);
+        for (i, s) in steps.iter().enumerate() {
+            moving_grid(&mut out, mesh, w, i, s);
+        }
+        out.push_str("    </Grid>\n");
+    }
+    out.push_str("  </Grid>\n  </Domain>\n</Xdmf>\n");
     Ok(out)
 }
 
@@ -446,100 +565,136 @@ mod tests {
             h5_path: path.into(),
             n_rows,
             n_cols: kind.n_cols(),
-            number_type: "Float",
+            number_type: "Float".into(),
             precision: 8,
         }
     }
 
-    /// Parse the .xmf as XML and resolve every DataItem in the HDF5 file beside it:
-    /// report the grids, and for each DataItem whether the dataset exists with exactly
-    /// the declared dimensions and a matching number type.
+    fn step(time: f64, attrs: Vec<XdmfAttr>) -> XdmfStep {
+        XdmfStep {
+            time,
+            attrs,
+            h5_file: None,
+        }
+    }
+
+    /// Parse the .xmf as XML and resolve every DataItem in the HDF5 file it names:
+    /// report the blocks (temporal collections in one spatial collection) and their
+    /// grids, and for each DataItem its dataset, the rows it selects and whether the
+    /// dataset exists with exactly the declared dimensions, a matching number type and
+    /// (a hyperslab) the selection inside it.
     const CHECK: &str = r#"
 import sys, os, json, h5py
 import xml.etree.ElementTree as ET
 xmf = sys.argv[1]
 root = ET.parse(xmf).getroot()
 assert root.tag == "Xdmf" and root.get("Version") == "3.0"
-coll = root.find("Domain/Grid")
-out = {"collection": [coll.get("GridType"), coll.get("CollectionType")], "grids": []}
-for g in coll.findall("Grid"):
-    grid = {"name": g.get("Name"), "time": float(g.find("Time").get("Value")),
-            "geometry": g.find("Geometry").get("GeometryType"),
+top = root.find("Domain/Grid")
+def item(d):
+    slab = d.get("ItemType") == "HyperSlab"
+    inner = d.findall("DataItem")[1] if slab else d
+    fname, path = inner.text.strip().split(":", 1)
+    dims = [int(x) for x in inner.get("Dimensions").split()]
+    with h5py.File(os.path.join(os.path.dirname(xmf), fname), "r") as f:
+        ds = f[path]
+        kind = {"Float": "f", "Int": "i", "UInt": "u"}[inner.get("NumberType")]
+        ok = list(ds.shape) == dims and ds.dtype.kind == kind \
+             and ds.dtype.itemsize == int(inner.get("Precision"))
+    rows = [0, dims[0]]
+    if slab:
+        sel = [int(x) for x in d.findall("DataItem")[0].text.split()]
+        n = len(dims)
+        start, count = sel[0], sel[2 * n]
+        out = [int(x) for x in d.get("Dimensions").split()]
+        ok = ok and out[0] == count and start + count <= dims[0] and out[1:] == dims[1:]
+        rows = [start, count]
+    return [fname + ":" + path, rows, ok]
+out = {"top": [top.get("GridType"), top.get("CollectionType")], "blocks": []}
+for b in top.findall("Grid"):
+    block = {"name": b.get("Name"), "type": [b.get("GridType"), b.get("CollectionType")],
+             "grids": []}
+    for g in b.findall("Grid"):
+        block["grids"].append({
+            "name": g.get("Name"), "time": float(g.find("Time").get("Value")),
             "topology": [g.find("Topology").get("TopologyType"),
                          int(g.find("Topology").get("NumberOfElements"))],
-            "attrs": [], "items": []}
-    for a in g.findall("Attribute"):
-        grid["attrs"].append([a.get("Name"), a.get("AttributeType"), a.get("Center")])
-    for d in g.iter("DataItem"):
-        fname, path = d.text.strip().split(":", 1)
-        dims = [int(x) for x in d.get("Dimensions").split()]
-        with h5py.File(os.path.join(os.path.dirname(xmf), fname), "r") as f:
-            ds = f[path]
-            kind = {"Float": "f", "Int": "i", "UInt": "u"}[d.get("NumberType")]
-            ok = list(ds.shape) == dims and ds.dtype.kind == kind \
-                 and ds.dtype.itemsize == int(d.get("Precision"))
-        grid["items"].append([path, dims, ok])
-    out["grids"].append(grid)
+            "attrs": [[a.get("Name"), a.get("AttributeType"), a.get("Center")]
+                      for a in g.findall("Attribute")],
+            "items": [item(d) for d in g.iter("DataItem")
+                      if d.get("Format") == "HDF" and d not in
+                      [x for s in g.iter("DataItem") if s.get("ItemType") == "HyperSlab"
+                       for x in s.findall("DataItem")]
+                      or d.get("ItemType") == "HyperSlab"]})
+    out["blocks"].append(block)
 print(json.dumps(out))
 "#;
 
-    #[test]
-    fn xdmf_is_well_formed_and_matches_the_hdf5_datasets() {
-        let dir = temp_dir("xdmf-match");
-        let h5 = dir.join("run.h5");
-        let (n_nodes, n_elems) = (12u64, 2u64);
-        let f = H5File::create(&SerialComm, &h5).unwrap();
-        f.write_rows_f64(COORDINATES, n_nodes, 3, 0, &vec![0.0; 36])
+    /// A file of `n_nodes` nodes and two hexahedra with two steps of displacement,
+    /// stress and von Mises, and the steps.
+    fn two_steps(f: &H5File, n_nodes: u64, n_elems: u64) -> Vec<XdmfStep> {
+        f.write_rows_f64(COORDINATES, n_nodes, 3, 0, &vec![0.0; 3 * n_nodes as usize])
             .unwrap();
-        f.write_rows_i64(CONNECTIVITY, n_elems, 8, 0, &[0; 16])
+        f.write_rows_i64(CONNECTIVITY, n_elems, 8, 0, &vec![0; 8 * n_elems as usize])
             .unwrap();
-        f.write_rows_i32("/mesh/partition", n_elems, 1, 0, &[0, 1])
+        f.write_rows_i32("/mesh/partition", n_elems, 1, 0, &vec![0; n_elems as usize])
             .unwrap();
         let mut steps = Vec::new();
-        for (k, t) in [0.5, 1.0e-7].into_iter().enumerate() {
+        for (k, t) in [0.0, 0.5].into_iter().enumerate() {
             let g = format!("/steps/{k:06}");
-            f.write_rows_f64(&format!("{g}/displacement"), n_nodes, 3, 0, &[1.0; 36])
+            let n = n_nodes as usize;
+            f.write_rows_f64(
+                &format!("{g}/displacement"),
+                n_nodes,
+                3,
+                0,
+                &vec![1.0; 3 * n],
+            )
+            .unwrap();
+            let e = n_elems as usize;
+            f.write_rows_f64(&format!("{g}/stress"), n_elems, 6, 0, &vec![2.0; 6 * e])
                 .unwrap();
-            f.write_rows_f64(&format!("{g}/stress"), n_elems, 6, 0, &[2.0; 12])
-                .unwrap();
-            f.write_rows_f64(&format!("{g}/von_mises"), n_elems, 1, 0, &[3.0; 2])
+            f.write_rows_f64(&format!("{g}/von_mises"), n_elems, 1, 0, &vec![3.0; e])
                 .unwrap();
             f.write_attr_f64(&g, "time", t).unwrap();
-            steps.push(XdmfStep {
-                time: t,
-                attrs: vec![
+            let (node, cell) = (Center::Node, Center::Cell);
+            steps.push(step(
+                t,
+                vec![
                     attr(
                         "displacement",
-                        Center::Node,
+                        node,
                         AttrKind::Vector,
                         &format!("{g}/displacement"),
                         n_nodes,
                     ),
                     attr(
                         "stress",
-                        Center::Cell,
+                        cell,
                         AttrKind::Tensor6,
                         &format!("{g}/stress"),
                         n_elems,
                     ),
                     attr(
                         "von_mises",
-                        Center::Cell,
+                        cell,
                         AttrKind::Scalar,
                         &format!("{g}/von_mises"),
                         n_elems,
                     ),
                 ],
-            });
+            ));
         }
-        drop(f);
-        let mesh = XdmfMesh {
+        steps
+    }
+
+    fn mesh(n_nodes: u64, n_elems: u64, parts: Vec<XdmfPart>) -> XdmfMesh {
+        XdmfMesh {
             h5_file_name: "run.h5".into(),
             n_nodes,
             n_elems,
             topology: XdmfTopology::Hexahedron,
             static_cell_attrs: vec![XdmfAttr {
-                number_type: "Int",
+                number_type: "Int".into(),
                 precision: 4,
                 ..attr(
                     "partition",
@@ -549,26 +704,48 @@ print(json.dumps(out))
                     n_elems,
                 )
             }],
-        };
+            parts,
+        }
+    }
+
+    fn part(name: &str, cells: (u64, u64)) -> XdmfPart {
+        XdmfPart {
+            name: name.into(),
+            cells,
+            entries: (0, 0),
+        }
+    }
+
+    /// One part: one block named after it, a grid per step with its time, every
+    /// DataItem the whole dataset (no hyperslab: every reader reads it).
+    #[test]
+    fn one_part_is_one_block_of_whole_datasets() {
+        let dir = temp_dir("xdmf-match");
+        let f = H5File::create(&SerialComm, &dir.join("run.h5")).unwrap();
+        let steps = two_steps(&f, 12, 2);
+        drop(f);
+        let mesh = mesh(12, 2, vec![part("block", (0, 2))]);
         let xmf = dir.join("run.xmf");
         // After the first step, then again after the second (the file is rewritten whole).
         write_xdmf(&xmf, &mesh, &steps[..1]).unwrap();
         let j = python_json(CHECK, &[xmf.to_str().unwrap()]);
-        assert_eq!(j["grids"].as_array().unwrap().len(), 1);
+        assert_eq!(j["blocks"][0]["grids"].as_array().unwrap().len(), 1);
         write_xdmf(&xmf, &mesh, &steps).unwrap();
         assert!(!dir.join("run.xmf.tmp").exists());
-
         let j = python_json(CHECK, &[xmf.to_str().unwrap()]);
+        assert_eq!(j["top"], serde_json::json!(["Collection", "Spatial"]));
+        let blocks = j["blocks"].as_array().unwrap();
+        assert_eq!(blocks.len(), 1);
+        assert_eq!(blocks[0]["name"], "block");
         assert_eq!(
-            j["collection"],
+            blocks[0]["type"],
             serde_json::json!(["Collection", "Temporal"])
         );
-        let grids = j["grids"].as_array().unwrap();
+        let grids = blocks[0]["grids"].as_array().unwrap();
         assert_eq!(grids.len(), 2);
-        assert_eq!(grids[0]["time"], 0.5);
-        assert_eq!(grids[1]["time"], 1.0e-7);
         for (k, g) in grids.iter().enumerate() {
-            assert_eq!(g["geometry"], "XYZ");
+            assert_eq!(g["name"], "block");
+            assert_eq!(g["time"], [0.0, 0.5][k]);
             assert_eq!(g["topology"], serde_json::json!(["Hexahedron", 2]));
             assert_eq!(
                 g["attrs"],
@@ -579,52 +756,81 @@ print(json.dumps(out))
                     ["von_mises", "Scalar", "Cell"]
                 ])
             );
-            let s = format!("/steps/{k:06}");
+            let s = format!("run.h5:/steps/{k:06}");
             assert_eq!(
                 g["items"],
                 serde_json::json!([
-                    ["/mesh/coordinates", [12, 3], true],
-                    ["/mesh/connectivity", [2, 8], true],
-                    ["/mesh/partition", [2], true],
-                    [format!("{s}/displacement"), [12, 3], true],
-                    [format!("{s}/stress"), [2, 6], true],
-                    [format!("{s}/von_mises"), [2], true]
+                    ["run.h5:/mesh/coordinates", [0, 12], true],
+                    ["run.h5:/mesh/connectivity", [0, 2], true],
+                    ["run.h5:/mesh/partition", [0, 2], true],
+                    [format!("{s}/displacement"), [0, 12], true],
+                    [format!("{s}/stress"), [0, 2], true],
+                    [format!("{s}/von_mises"), [0, 2], true]
                 ])
             );
         }
         let _ = std::fs::remove_dir_all(&dir);
     }
 
-    /// The walls' layout: each step a spatial collection (with the time) of the mesh grid
-    /// and one triangle grid per wall; every DataItem resolved in the HDF5 file.
-    const CHECK_WALLS: &str = r#"
-import sys, os, json, h5py
-import xml.etree.ElementTree as ET
-xmf = sys.argv[1]
-coll = ET.parse(xmf).getroot().find("Domain/Grid")
-out = []
-for g in coll.findall("Grid"):
-    step = {"type": [g.get("GridType"), g.get("CollectionType")],
-            "time": float(g.find("Time").get("Value")), "grids": []}
-    for c in g.findall("Grid"):
-        items = []
-        for d in c.iter("DataItem"):
-            fname, path = d.text.strip().split(":", 1)
-            dims = [int(x) for x in d.get("Dimensions").split()]
-            with h5py.File(os.path.join(os.path.dirname(xmf), fname), "r") as f:
-                ok = list(f[path].shape) == dims
-            items.append([path, ok])
-        step["grids"].append({"name": c.get("Name"), "type": c.get("GridType"),
-            "topology": [c.find("Topology").get("TopologyType"),
-                         int(c.find("Topology").get("NumberOfElements"))],
-            "attrs": [a.get("Name") for a in c.findall("Attribute")],
-            "time": c.find("Time") is not None, "items": items})
-    out.append(step)
-print(json.dumps(out))
-"#;
+    /// Two parts: a block each, named after the part at every step, each the part's rows
+    /// of every cell dataset (hyperslabs inside the dataset) and every node; a step of
+    /// an earlier run's file refers to that file.
+    #[test]
+    fn parts_are_blocks_of_their_rows() {
+        let dir = temp_dir("xdmf-parts");
+        let f = H5File::create(&SerialComm, &dir.join("run.h5")).unwrap();
+        let mut steps = two_steps(&f, 12, 3);
+        drop(f);
+        let mesh = mesh(12, 3, vec![part("lower", (0, 1)), part("upper", (1, 2))]);
+        let xmf = dir.join("run.xmf");
+        write_xdmf(&xmf, &mesh, &steps).unwrap();
+        let j = python_json(CHECK, &[xmf.to_str().unwrap()]);
+        let blocks = j["blocks"].as_array().unwrap();
+        assert_eq!(blocks.len(), 2);
+        for (b, (name, rows)) in blocks.iter().zip([("lower", [0, 1]), ("upper", [1, 2])]) {
+            assert_eq!(b["name"], name);
+            for (k, g) in b["grids"].as_array().unwrap().iter().enumerate() {
+                assert_eq!(g["name"], name);
+                assert_eq!(g["topology"], serde_json::json!(["Hexahedron", rows[1]]));
+                let s = format!("run.h5:/steps/{k:06}");
+                assert_eq!(
+                    g["items"],
+                    serde_json::json!([
+                        ["run.h5:/mesh/coordinates", [0, 12], true],
+                        ["run.h5:/mesh/connectivity", rows, true],
+                        ["run.h5:/mesh/partition", rows, true],
+                        [format!("{s}/displacement"), [0, 12], true],
+                        [format!("{s}/stress"), rows, true],
+                        [format!("{s}/von_mises"), rows, true]
+                    ])
+                );
+            }
+        }
+        // Parts must cover the mesh.
+        let short = XdmfMesh {
+            parts: vec![part("lower", (0, 1)), part("upper", (1, 1))],
+            ..mesh.clone()
+        };
+        let e = xdmf_text(&short, &steps).unwrap_err();
+        assert!(
+            e.message.contains("the parts have 2 cells, the mesh 3"),
+            "{e}"
+        );
+        // A step in another file: every DataItem of it names that file.
+        steps[0].h5_file = Some("../first/run.h5".into());
+        let t = xdmf_text(&mesh, &steps).unwrap();
+        let first = t
+            .split("<Grid Name=\"upper\" GridType=\"Uniform\">")
+            .nth(1)
+            .unwrap();
+        let first = first.split("</Grid>").next().unwrap();
+        assert_eq!(first.matches("../first/run.h5:").count(), 6, "{first}");
+        assert!(!first.contains(">run.h5:"), "{first}");
+        let _ = std::fs::remove_dir_all(&dir);
+    }
 
     #[test]
-    fn walls_make_each_step_a_spatial_collection() {
+    fn walls_are_blocks_of_their_own() {
         let dir = temp_dir("xdmf-walls");
         let (n_nodes, n_elems) = (8u64, 1u64);
         let f = H5File::create(&SerialComm, &dir.join("run.h5")).unwrap();
@@ -652,51 +858,40 @@ print(json.dumps(out))
                 cells: "/walls/floor/triangles".into(),
                 n_cells: 2,
             });
-            steps.push(XdmfStep {
-                time: t,
-                attrs: vec![attr(
+            let d = format!("{g}/displacement");
+            steps.push(step(
+                t,
+                vec![attr(
                     "displacement",
                     Center::Node,
                     AttrKind::Vector,
-                    &format!("{g}/displacement"),
+                    &d,
                     n_nodes,
                 )],
-            });
+            ));
         }
         drop(f);
         let mesh = XdmfMesh {
-            h5_file_name: "run.h5".into(),
-            n_nodes,
-            n_elems,
-            topology: XdmfTopology::Hexahedron,
             static_cell_attrs: vec![],
+            ..mesh(n_nodes, n_elems, vec![])
         };
-        // Without walls the document is the plain one.
-        assert_eq!(
-            xdmf_text_with_grids(&mesh, &steps, &[]).unwrap(),
-            xdmf_text(&mesh, &steps).unwrap()
-        );
         let xmf = dir.join("run.xmf");
         write_xdmf_with_grids(&xmf, &mesh, &steps, std::slice::from_ref(&wall)).unwrap();
-        let j = python_json(CHECK_WALLS, &[xmf.to_str().unwrap()]);
-        let j = j.as_array().unwrap();
-        assert_eq!(j.len(), 2);
-        for (k, s) in j.iter().enumerate() {
-            let g = format!("/steps/{:06}", k + 1);
-            assert_eq!(s["type"], serde_json::json!(["Collection", "Spatial"]));
-            assert_eq!(s["time"], [0.5, 1.0][k]);
+        let j = python_json(CHECK, &[xmf.to_str().unwrap()]);
+        let blocks = j["blocks"].as_array().unwrap();
+        assert_eq!(blocks.len(), 2);
+        assert_eq!(blocks[0]["name"], "mesh");
+        assert_eq!(blocks[1]["name"], "wall_floor");
+        for (k, g) in blocks[1]["grids"].as_array().unwrap().iter().enumerate() {
+            let s = format!("run.h5:/steps/{:06}", k + 1);
+            let time = [0.5, 1.0][k];
             assert_eq!(
-                s["grids"],
-                serde_json::json!([
-                    {"name": "mesh", "type": "Uniform", "topology": ["Hexahedron", 1],
-                     "attrs": ["displacement"], "time": false,
-                     "items": [["/mesh/coordinates", true], ["/mesh/connectivity", true],
-                               [format!("{g}/displacement"), true]]},
-                    {"name": "wall_floor", "type": "Uniform", "topology": ["Triangle", 2],
-                     "attrs": [], "time": false,
-                     "items": [["/walls/floor/triangles", true],
-                               [format!("{g}/walls/floor/points"), true]]}
-                ])
+                g,
+                &serde_json::json!({
+                    "name": "wall_floor", "time": time,
+                    "topology": ["Triangle", 2], "attrs": [],
+                    "items": [["run.h5:/walls/floor/triangles", [0, 2], true],
+                              [format!("{s}/walls/floor/points"), [0, 4], true]]})
             );
         }
         // A wall must have points for every step.
@@ -714,11 +909,12 @@ print(json.dumps(out))
             n_elems: 2,
             topology: XdmfTopology::Tetrahedron,
             static_cell_attrs: vec![],
+            parts: vec![],
         };
-        let steps = vec![XdmfStep {
-            time: 2.0,
-            attrs: vec![attr("p<1>", Center::Node, AttrKind::Scalar, "/s/p", 5)],
-        }];
+        let steps = vec![step(
+            2.0,
+            vec![attr("p<1>", Center::Node, AttrKind::Scalar, "/s/p", 5)],
+        )];
         let t = xdmf_text(&mesh, &steps).unwrap();
         assert!(
             t.contains("TopologyType=\"Tetrahedron\" NumberOfElements=\"2\""),
@@ -738,18 +934,33 @@ print(json.dumps(out))
             "{t}"
         );
         assert!(t.contains("Dimensions=\"14\" NumberType=\"Int\" Precision=\"8\" Format=\"HDF\">a&amp;b.h5:/mesh/connectivity"), "{t}");
+        // A part of a mixed mesh: its entries of the connectivity.
+        mesh.parts = vec![
+            XdmfPart {
+                name: "a".into(),
+                cells: (0, 1),
+                entries: (0, 5),
+            },
+            XdmfPart {
+                name: "b".into(),
+                cells: (1, 1),
+                entries: (5, 9),
+            },
+        ];
+        let t = xdmf_text(&mesh, &steps).unwrap();
+        assert!(t.contains(">5 1 9</DataItem>"), "{t}");
 
-        // No steps yet: still a valid, empty collection.
+        // No steps yet: still a valid document, its blocks empty.
         let t = xdmf_text(&mesh, &[]).unwrap();
         assert!(
             t.contains("CollectionType=\"Temporal\">\n    </Grid>"),
             "{t}"
         );
 
-        let bad_rows = vec![XdmfStep {
-            time: 0.0,
-            attrs: vec![attr("u", Center::Node, AttrKind::Vector, "/s/u", 2)],
-        }];
+        let bad_rows = vec![step(
+            0.0,
+            vec![attr("u", Center::Node, AttrKind::Vector, "/s/u", 2)],
+        )];
         let e = xdmf_text(&mesh, &bad_rows).unwrap_err();
         assert!(
             e.message.contains("'u'") && e.message.contains("2 rows"),
@@ -757,23 +968,9 @@ print(json.dumps(out))
         );
         let mut bad_cols = attr("s", Center::Cell, AttrKind::Tensor6, "/s/s", 2);
         bad_cols.n_cols = 9;
-        let e = xdmf_text(
-            &mesh,
-            &[XdmfStep {
-                time: 0.0,
-                attrs: vec![bad_cols],
-            }],
-        )
-        .unwrap_err();
+        let e = xdmf_text(&mesh, &[step(0.0, vec![bad_cols])]).unwrap_err();
         assert!(e.message.contains("9 columns"), "{e}");
-        let e = xdmf_text(
-            &mesh,
-            &[XdmfStep {
-                time: f64::NAN,
-                attrs: vec![],
-            }],
-        )
-        .unwrap_err();
+        let e = xdmf_text(&mesh, &[step(f64::NAN, vec![])]).unwrap_err();
         assert!(e.message.contains("not finite"), "{e}");
     }
 }
