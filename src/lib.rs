@@ -1,8 +1,8 @@
 //! alfe: an MPI-distributed implicit nonlinear finite-element solver for solids in
-//! contact. See `README.md` for use, `DESIGN.md` for the map, and each module's
+//! contact. See `README.md` for use, `docs/src/design.md` for the map, and each module's
 //! documentation for the why.
 //!
-//! Layers, bottom up (`DESIGN.md`, enforced by `tests/layers.rs`): [`error`], [`curve`] and
+//! Layers, bottom up (`docs/src/design.md`, enforced by `tests/layers.rs`): [`error`], [`curve`] and
 //! [`parallel`] (moves numbers, knows no physics); [`mesh`] and [`material`]; [`fem`]
 //! (element kernels; with the layers above, no MPI); [`contact`] (pointwise laws and
 //! shapes), [`linalg`] (distributed matrices, GMRES, preconditioners) and [`partition`]

@@ -1,6 +1,6 @@
 //! The pointwise augmented-Lagrangian contact law of one tracked node in the local frame
 //! [n, t1, t2] of the surface point it projects to: the residual of the paper (§2.1,
-//! DESIGN.md "Contact: the formulation"); the penalty law is [`super::penalty`]. Gaps
+//! docs/src/design.md "Contact: the formulation"); the penalty law is [`super::penalty`]. Gaps
 //! and multipliers are lengths; the caller scales by κ. Derivatives are the generalized
 //! (semi-smooth) Jacobian used by Newton and by the preconditioners.
 

@@ -1,5 +1,5 @@
 //! Contact kernels: rigid shapes and walls, small-sliding pairs between deformable
-//! parts, and the contact laws they share (DESIGN.md, "Contact: the formulation").
+//! parts, and the contact laws they share (docs/src/design.md, "Contact: the formulation").
 //! Kernels here are pure; the model's contributions (`model::walls`, `model::pairs`)
 //! loop over tracked nodes and the parallel layer never sees any of it.
 

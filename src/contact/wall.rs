@@ -59,7 +59,7 @@ impl ShapeDef {
     }
 }
 
-/// How a wall's contact is enforced (DESIGN.md, "Contact: the formulation").
+/// How a wall's contact is enforced (docs/src/design.md, "Contact: the formulation").
 #[derive(
     Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default, schemars::JsonSchema,
 )]

@@ -300,7 +300,7 @@ pub fn quality(mesh: &Mesh, part: &[u32], nparts: usize) -> Result<Quality> {
     })
 }
 
-/// A node is owned by the lowest rank that has an element touching it (DESIGN.md).
+/// A node is owned by the lowest rank that has an element touching it (docs/src/design.md).
 pub fn node_owner(mesh: &Mesh, part: &[u32]) -> Vec<u32> {
     let mut owner = vec![u32::MAX; mesh.n_nodes()];
     for (e, &p) in part.iter().enumerate() {

@@ -1,7 +1,7 @@
 //! `[[pairs]]`: small-sliding contact between deformable parts (paper §3.7) in a deck.
 //! Each tracked node is paired once, here on rank 0 before partitioning, with the
 //! closest point on the reference surface's faces; the pairs and their face
-//! coordinates never change (DESIGN.md, "small-sliding surface-to-surface").
+//! coordinates never change (docs/src/design.md, "small-sliding surface-to-surface").
 
 use super::check::err;
 use super::context::Context;

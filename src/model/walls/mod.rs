@@ -1,4 +1,4 @@
-//! A rigid wall as a contribution (DESIGN.md "Contact: the formulation", the paper's
+//! A rigid wall as a contribution (docs/src/design.md "Contact: the formulation", the paper's
 //! §2.1): every tracked node this rank owns is projected onto the wall, the ALM or
 //! penalty law ([`crate::contact::law`]) gives its force and, for ALM, the residual rows
 //! of its three multipliers (unknowns owned with the node), and the generalized

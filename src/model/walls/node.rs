@@ -231,7 +231,7 @@ impl Wall {
         let p = wp.frame;
         let xo = self.x_old[j];
         // Slip over the step, on the tangent plane: t·(wall point's old position − x_old)
-        // (t·(x − point) = 0), DESIGN.md "g_T".
+        // (t·(x − point) = 0), docs/src/design.md "g_T".
         let d = [
             wp.point_old[0] - xo[0],
             wp.point_old[1] - xo[1],

@@ -58,7 +58,7 @@ pub struct Deck {
     /// (`output::quantities`).
     #[serde(default)]
     pub quantities: Vec<QuantityDeck>,
-    /// Rigid walls (contact, DESIGN.md "Contact kinds").
+    /// Rigid walls (contact, docs/src/design.md "Contact kinds").
     #[serde(default)]
     pub walls: Vec<WallDeck>,
     /// Contact entities: rigid bodies with analytical shapes whose DOFs are prescribed or
@@ -228,8 +228,9 @@ pub enum HardeningDeck {
     },
 }
 
-/// How a part's hex8 elements treat volume change (tet4 has the standard element only:
-/// any other named formulation is an error on a part with tet4).
+/// How a part's elements treat volume change. A formulation named must apply to every
+/// element type of the part (an error names the type otherwise); `alfe check` prints
+/// what each part got.
 #[derive(
     Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize, Default, schemars::JsonSchema,
 )]
@@ -381,7 +382,7 @@ pub enum MeshDeck {
         #[serde(default)]
         refine: Vec<SlabDeck>,
     },
-    /// A Gmsh MSH 4.1 or 2.2 ASCII file (hex8, tet4, tet10, wedge6; physical groups become
+    /// A Gmsh MSH 4.1 or 2.2 file, ASCII or binary (hex8, tet4, tet10, wedge6; physical groups become
     /// groups). A relative path is taken from the deck's directory.
     Gmsh { file: String },
     /// An Abaqus/CalculiX input file (`.inp`): its `*NODE`, `*ELEMENT` (C3D8, C3D4,

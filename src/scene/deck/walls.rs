@@ -71,8 +71,8 @@ pub struct WallDeck {
     /// `scripts/study --plan penalty`).
     #[serde(default = "d_penalty_scale")]
     pub penalty_scale: f64,
-    /// ALM's tangential augmentation α (stick stiffness α κ); default
-    /// [`DEFAULT_TANGENTIAL_AUGMENTATION`].
+    /// ALM's tangential augmentation α (stick stiffness α κ); default 1
+    /// (`contact::law::DEFAULT_TANGENTIAL_AUGMENTATION`).
     #[serde(default)]
     pub tangential_augmentation: Option<f64>,
     /// ALM's friction threshold: "multiplier" (μ max(λ_N, 0), the paper's, default) or

@@ -23,7 +23,7 @@ use crate::Result;
 pub use context::{Next, NonlinearSolver, Prediction, Solver, SolverContext, Start};
 pub use precond::Preconditioning;
 
-/// The three nonlinear solvers (DESIGN.md, "Nonlinear solvers").
+/// The three nonlinear solvers (docs/src/design.md, "Nonlinear solvers").
 #[derive(
     Debug,
     Clone,
@@ -93,7 +93,7 @@ impl SolverKind {
 #[serde(rename_all = "kebab-case")]
 pub enum FdRule {
     /// ε = δ · h / ‖v‖ with h a characteristic element length: the perturbation moves
-    /// nodes by δ of an element (DESIGN.md).
+    /// nodes by δ of an element (docs/src/design.md).
     #[default]
     Element,
     /// ε = √((1 + ‖u‖) ε_mach) / ‖v‖ (Pernice & Walker 1998, NITSOL).
