@@ -245,11 +245,25 @@ fn iterations_csv_has_every_attempt() {
     );
 }
 
+/// The times of an `.xmf`'s first block (every block has the same steps).
+fn block_times(xmf: &str) -> Vec<String> {
+    let first = xmf
+        .split("CollectionType=\"Temporal\"")
+        .nth(1)
+        .unwrap_or("");
+    let first = first.split("CollectionType=\"Temporal\"").next().unwrap();
+    first
+        .split("<Time Value=\"")
+        .skip(1)
+        .map(|s| s.split('"').next().unwrap().to_string())
+        .collect()
+}
+
 /// A run stopped after step k and restarted gives the uninterrupted run's answers (the
 /// history from step k + 1 on within 1e-10), static with frictional contact and hybrid
-/// elements, and implicit dynamics with a J2 bar against a wall; on 2 ranks too. A
-/// restart with another deck, into its own directory, or with nothing to restart from
-/// is refused with the reason.
+/// elements, and implicit dynamics with a J2 bar against a wall; on 2 ranks too; its
+/// `.xmf` shows the whole run. A restart with another deck, into its own directory, or
+/// with nothing to restart from is refused with the reason.
 #[test]
 fn a_restarted_run_gives_the_uninterrupted_answer() {
     let dir = scratch("restart");
@@ -296,6 +310,21 @@ fn a_restarted_run_gives_the_uninterrupted_answer() {
         let steps: Vec<f64> = rows.iter().map(|r| r[0]).collect();
         let want: Vec<f64> = whole.iter().map(|r| r[0]).collect();
         assert_eq!(steps, want, "{tag}: steps of the restarted history");
+        // Its .xmf covers the whole run: the earlier run's output steps (in that run's
+        // file, by a relative path), then its own, at the uninterrupted run's times.
+        let xmf = |d: &std::path::Path| read(&d.join(format!("{scene}.xmf")));
+        let (carried, whole_xmf) = (xmf(&again), xmf(&dir.join(&full)));
+        assert_eq!(
+            block_times(&carried),
+            block_times(&whole_xmf),
+            "{tag}: times of the restarted .xmf"
+        );
+        assert!(
+            carried.contains(&format!(
+                ">../{part}/{scene}.h5:/steps/000000/displacement<"
+            )),
+            "{tag}: {carried}"
+        );
         let gap = history_gap(&dir.join(&full), &again);
         eprintln!("{tag}: restart differs by {gap:e}");
         assert!(gap < 1e-10, "{tag}: restart differs by {gap:e}");
