@@ -7,7 +7,9 @@ use crate::linalg::matrix::DistMatrix;
 use crate::model::Model;
 use crate::parallel::Comm;
 use crate::solve::control::StepControl;
-use crate::solve::nonlinear::{NonlinearOptions, NonlinearProblem, Preconditioning, Solver, Start};
+use crate::solve::nonlinear::{
+    Failure, LineSearch, NonlinearOptions, NonlinearProblem, Preconditioning, Solver, Start,
+};
 pub use crate::solve::record::{Attempt, Flow, Resume, RunTotals, StageTotals, StepRecord};
 use crate::solve::{Analysis, Predictor};
 use crate::Result;
@@ -42,6 +44,15 @@ pub fn model_solver<'o>(comm: &dyn Comm, model: &Model, opts: &'o NonlinearOptio
     Solver::new(opts, k, pc)
 }
 
+/// The options for the retries of a step that failed with stick/slip cycling: Armijo
+/// line search where `opts` leave it to `auto`; `None`: the same as `opts`.
+pub fn retry_options(opts: &NonlinearOptions) -> Option<NonlinearOptions> {
+    (opts.line_search == LineSearch::Auto).then(|| NonlinearOptions {
+        line_search: LineSearch::On,
+        ..opts.clone()
+    })
+}
+
 /// Called with every converged step, its solution, the model (output, progress) and
 /// how to resume after it (built only when asked for).
 pub type StepObserver<'a> =
@@ -65,7 +76,12 @@ pub fn run_static(
     let n = model.n_owned_dofs();
     u.resize(n, 0.0);
     let mut r = vec![0.0; n];
-    let mut solver = model_solver(comm, model, opts);
+    // The options as given, and for the retries of a step that failed with stick/slip
+    // cycling where line search is left to `auto`: Armijo on every correction (the full
+    // Newton steps are what carries nodes across the friction cone and back; penalty
+    // friction on the seal and rubber-indent finishes only so).
+    let (given, armijo) = (opts.clone(), retry_options(opts));
+    let mut solver = model_solver(comm, model, &given);
     if let Some(a) = resume.and_then(|r| r.auto.clone()) {
         solver.auto = a;
     }
@@ -112,6 +128,9 @@ pub fn run_static(
             }
             model.after_failed_attempt();
             solver.pc.invalidate();
+            if let (Some(Failure::StickSlipCycling), Some(a)) = (stats.failure, &armijo) {
+                solver.opts = a;
+            }
             failed = true;
             let reason = stats.reason.clone();
             let kind = stats.failure;
@@ -130,6 +149,7 @@ pub fn run_static(
             continue;
         }
         model.commit();
+        solver.opts = &given;
         let du: Vec<f64> = trial.iter().zip(u.iter()).map(|(a, b)| a - b).collect();
         last = Some((du, t - t_n));
         failed = false;
@@ -163,4 +183,30 @@ pub fn run_static(
     }
     tot.converged = true;
     Ok(tot)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::solve::nonlinear::testing::options;
+    use crate::solve::nonlinear::SolverKind;
+
+    /// A step that failed with stick/slip cycling is retried with Armijo line search
+    /// where the deck leaves line search to `auto`, with every other option as given;
+    /// a line search the deck names (on or off) is kept.
+    #[test]
+    fn cycling_retries_take_armijo_where_line_search_is_auto() {
+        for kind in [SolverKind::Newton, SolverKind::Jfnk, SolverKind::Auto] {
+            let mut given = options(kind);
+            given.line_search = LineSearch::Auto;
+            given.max_iterations = 17;
+            let retry = retry_options(&given).expect("auto line search: Armijo retries");
+            assert_eq!(retry.line_search, LineSearch::On);
+            assert_eq!((retry.kind, retry.max_iterations), (kind, 17));
+            for named in [LineSearch::On, LineSearch::Off] {
+                given.line_search = named;
+                assert!(retry_options(&given).is_none(), "{named:?} is the deck's");
+            }
+        }
+    }
 }

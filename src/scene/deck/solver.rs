@@ -30,9 +30,11 @@ pub struct SolverDeck {
     #[serde(default)]
     pub linear: LinearDeck,
     /// Backtracking (Armijo) line search on ‖r_free‖ of Newton and JFNK: `true`, `false`
-    /// or `"auto"` (default: full steps unless one multiplies ‖r‖ by more than 1000).
-    /// Always-on backtracking slows or stalls Newton and JFNK on large rotations, where
-    /// full steps overshoot and then converge (`cantilever`, `twisted-block`).
+    /// or `"auto"` (default: full steps unless one multiplies ‖r‖ by more than 1000;
+    /// the retries of an increment that failed with stick/slip cycling backtrack on every
+    /// correction). Always-on backtracking slows or stalls Newton and JFNK on large
+    /// rotations, where full steps overshoot and then converge (`cantilever`,
+    /// `twisted-block`).
     #[serde(default)]
     pub line_search: Option<LineSearchDeck>,
     /// JFNK: relative finite-difference perturbation δ (of an element length).

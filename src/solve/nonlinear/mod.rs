@@ -111,7 +111,9 @@ pub enum LineSearch {
     /// Full steps, unless the full step multiplies ‖r_free‖ by more than
     /// [`context::AUTO_GROWTH`]: then Armijo backtracking from there. A full step that
     /// overshoots and then converges (large rotations, contact changes) is kept; one that
-    /// throws the iterate far away is not.
+    /// throws the iterate far away is not. The static stepping retries an increment that
+    /// failed with stick/slip cycling with [`LineSearch::On`]
+    /// ([`crate::solve::stepping::retry_options`]).
     #[default]
     Auto,
 }
