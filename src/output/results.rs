@@ -655,110 +655,103 @@ impl ResultsWriter {
         model: &Model,
         nodal: &[(&str, &[f64])],
     ) -> Result<()> {
-        {
-            let g = format!("/steps/{:06}", rec.step);
-            self.h5.create_group(&g)?;
-            self.h5.write_attr_f64(&g, "time", rec.time)?;
-            let attr =
-                |name: &str, center: Center, kind: AttrKind, n_rows: u64, n_cols: u64| XdmfAttr {
-                    name: name.into(),
-                    center,
-                    kind,
-                    h5_path: format!("{g}/{name}"),
-                    n_rows,
-                    n_cols,
-                    number_type: "Float".into(),
-                    precision: 8,
+        let g = format!("/steps/{:06}", rec.step);
+        self.h5.create_group(&g)?;
+        self.h5.write_attr_f64(&g, "time", rec.time)?;
+        let attr =
+            |name: &str, center: Center, kind: AttrKind, n_rows: u64, n_cols: u64| XdmfAttr {
+                name: name.into(),
+                center,
+                kind,
+                h5_path: format!("{g}/{name}"),
+                n_rows,
+                n_cols,
+                number_type: "Float".into(),
+                precision: 8,
+            };
+        let mut attrs = Vec::new();
+        let mut node_vectors: Vec<(&str, &[f64])> = vec![("displacement", u)];
+        node_vectors.extend_from_slice(nodal);
+        for (name, v) in node_vectors {
+            let v = &v[..self.n_node_dofs];
+            self.h5
+                .write_rows_f64(&format!("{g}/{name}"), self.n_nodes, 3, self.node_start, v)?;
+            self.bytes_written += 8 * v.len() as u64;
+            attrs.push(attr(name, Center::Node, AttrKind::Vector, self.n_nodes, 3));
+        }
+        for f in model.fields(comm, u, rec.time) {
+            let kind = match f.spec.width {
+                1 => AttrKind::Scalar,
+                3 => AttrKind::Vector,
+                _ => AttrKind::Tensor6,
+            };
+            let (cols, path) = (kind.n_cols(), format!("{g}/{}", f.spec.name));
+            let (center, n_rows) = match f.spec.center {
+                FieldCenter::Node => {
+                    let (n, start) = (self.n_nodes, self.node_start);
+                    self.h5.write_rows_f64(&path, n, cols, start, &f.values)?;
+                    (Center::Node, n)
+                }
+                FieldCenter::Cell => {
+                    let n = self.n_elems;
+                    self.cells.write(&self.h5, &path, n, cols, &f.values)?;
+                    (Center::Cell, n)
+                }
+            };
+            self.bytes_written += 8 * f.values.len() as u64;
+            attrs.push(attr(&f.spec.name, center, kind, n_rows, cols));
+        }
+        // Moving geometry at this step (rank 0 writes the rows, every rank takes part).
+        if !self.grids.is_empty() {
+            let points = model.grid_points(rec.time, &rec.columns);
+            let mut grid = 0;
+            for (gr, pts) in self.grids.iter_mut().zip(points) {
+                let rank0 = comm.rank() == 0;
+                let flat: Vec<f64> = if rank0 {
+                    pts.iter().flatten().copied().collect()
+                } else {
+                    Vec::new()
                 };
-            let mut attrs = Vec::new();
-            let mut node_vectors: Vec<(&str, &[f64])> = vec![("displacement", u)];
-            node_vectors.extend_from_slice(nodal);
-            for (name, v) in node_vectors {
-                let v = &v[..self.n_node_dofs];
-                self.h5.write_rows_f64(
-                    &format!("{g}/{name}"),
-                    self.n_nodes,
-                    3,
-                    self.node_start,
-                    v,
-                )?;
-                self.bytes_written += 8 * v.len() as u64;
-                attrs.push(attr(name, Center::Node, AttrKind::Vector, self.n_nodes, 3));
-            }
-            for f in model.fields(comm, u, rec.time) {
-                let kind = match f.spec.width {
-                    1 => AttrKind::Scalar,
-                    3 => AttrKind::Vector,
-                    _ => AttrKind::Tensor6,
-                };
-                let (cols, path) = (kind.n_cols(), format!("{g}/{}", f.spec.name));
-                let (center, n_rows) = match f.spec.center {
-                    FieldCenter::Node => {
-                        let (n, start) = (self.n_nodes, self.node_start);
-                        self.h5.write_rows_f64(&path, n, cols, start, &f.values)?;
-                        (Center::Node, n)
-                    }
-                    FieldCenter::Cell => {
-                        let n = self.n_elems;
-                        self.cells.write(&self.h5, &path, n, cols, &f.values)?;
-                        (Center::Cell, n)
-                    }
-                };
-                self.bytes_written += 8 * f.values.len() as u64;
-                attrs.push(attr(&f.spec.name, center, kind, n_rows, cols));
-            }
-            // Moving geometry at this step (rank 0 writes the rows, every rank takes part).
-            if !self.grids.is_empty() {
-                let points = model.grid_points(rec.time, &rec.columns);
-                let mut grid = 0;
-                for (gr, pts) in self.grids.iter_mut().zip(points) {
-                    let rank0 = comm.rank() == 0;
-                    let flat: Vec<f64> = if rank0 {
-                        pts.iter().flatten().copied().collect()
-                    } else {
-                        Vec::new()
-                    };
-                    let path = format!("{g}/{}/points", gr.group);
-                    self.h5
-                        .write_rows_f64(&path, gr.n_points as u64, 3, 0, &flat)?;
-                    self.bytes_written += 8 * flat.len() as u64;
-                    self.xgrids[grid].steps.push(GridAt {
-                        points: path,
-                        n_points: gr.n_points as u64,
-                        cells: gr.cells.0.clone(),
-                        n_cells: gr.cells.1,
-                    });
+                let path = format!("{g}/{}/points", gr.group);
+                self.h5
+                    .write_rows_f64(&path, gr.n_points as u64, 3, 0, &flat)?;
+                self.bytes_written += 8 * flat.len() as u64;
+                self.xgrids[grid].steps.push(GridAt {
+                    points: path,
+                    n_points: gr.n_points as u64,
+                    cells: gr.cells.0.clone(),
+                    n_cells: gr.cells.1,
+                });
+                grid += 1;
+                if let Some((i, so_far)) = gr.path.as_mut() {
+                    let at = write_paths(
+                        &self.h5,
+                        &format!("{g}/{}/path", gr.group),
+                        gr.n_points,
+                        self.xgrids[*i].steps.len() - self.carried + 1,
+                        so_far,
+                        if rank0 { &pts } else { &[] },
+                        rank0,
+                    )?;
+                    self.bytes_written += at.n_points * 24 + at.n_cells * 16;
+                    self.xgrids[*i].steps.push(at);
                     grid += 1;
-                    if let Some((i, so_far)) = gr.path.as_mut() {
-                        let at = write_paths(
-                            &self.h5,
-                            &format!("{g}/{}/path", gr.group),
-                            gr.n_points,
-                            self.xgrids[*i].steps.len() - self.carried + 1,
-                            so_far,
-                            if rank0 { &pts } else { &[] },
-                            rank0,
-                        )?;
-                        self.bytes_written += at.n_points * 24 + at.n_cells * 16;
-                        self.xgrids[*i].steps.push(at);
-                        grid += 1;
-                    }
                 }
             }
-            self.h5.flush()?;
-            self.steps.push(XdmfStep {
-                time: rec.time,
-                attrs,
-                h5_file: None,
-            });
-            let r = if comm.rank() == 0 {
-                write_xdmf_with_grids(&self.xmf_path, &self.xmesh, &self.steps, &self.xgrids)
-                    .and_then(|_| self.write_index())
-            } else {
-                Ok(())
-            };
-            rank0_outcome(comm, r)?;
         }
+        self.h5.flush()?;
+        self.steps.push(XdmfStep {
+            time: rec.time,
+            attrs,
+            h5_file: None,
+        });
+        let r = if comm.rank() == 0 {
+            write_xdmf_with_grids(&self.xmf_path, &self.xmesh, &self.steps, &self.xgrids)
+                .and_then(|_| self.write_index())
+        } else {
+            Ok(())
+        };
+        rank0_outcome(comm, r)?;
         Ok(())
     }
 
