@@ -354,8 +354,8 @@ fn local_law(
         }
         PairLaw::Penalty { law, e_old } => {
             let eo = [dot(t1, e_old), dot(t2, e_old)];
-            let p = penalty(g, eo, &law);
-            (active, sticking) = (p.active, p.sticking);
+            let p = penalty(g, eo, &law, decision);
+            (active, sticking, branch) = (p.active, p.sticking, p.branch);
             fl = p.f;
             dfdg = p.df_dg;
             let e = p.elastic_slip;

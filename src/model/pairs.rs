@@ -677,7 +677,7 @@ impl Recovery for Pairs {
     /// A penalty pair that cycled gets its stick stiffness × 0.3, twice at most, as a
     /// wall's node does.
     fn after_failed_attempt(&mut self) -> bool {
-        self.softens() && soften_cycling(&self.flips, &mut self.stick_scale)
+        self.softens() && soften_cycling(&self.flips, &mut self.stick_scale, &mut self.slip_old)
     }
 }
 
@@ -918,6 +918,9 @@ mod tests {
             assert!(p.after_failed_attempt());
             assert!(!p.after_failed_attempt());
             assert!(close(p.stick_scale[0], 0.09));
+            // The committed state keeps its force (its carried slip grew by 1 / 0.09).
+            let s = eval(&mut p, 0.004);
+            assert!(s.sticking && close(s.force[0], -10.0 * 0.004), "{s:?}");
             let soft = p.saved_state();
             let mut r = fresh();
             r.restore_state(&soft).unwrap();

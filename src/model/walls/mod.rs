@@ -806,7 +806,7 @@ impl Recovery for Wall {
         if self.def.friction <= 0.0 {
             return false;
         }
-        soften_cycling(&self.flips, &mut self.stick_scale)
+        soften_cycling(&self.flips, &mut self.stick_scale, &mut self.slip_old)
     }
 }
 
@@ -987,9 +987,15 @@ mod tests {
             w.flips[0] = CYCLING_FLIPS;
             assert!(w.after_failed_attempt());
             assert!(close(w.penalty_law(0).stick_scale, 0.3));
+            // The committed state keeps its force (its carried slip grew by 1 / 0.3):
+            // the retry starts in balance.
+            let n = eval(&mut w, 0.004);
+            assert!(n.sticking && close(n.force[0], -10.0 * 0.004), "{n:?}");
             assert!(w.after_failed_attempt());
             assert!(!w.after_failed_attempt());
             assert!(close(w.penalty_law(0).stick_scale, 0.09));
+            let n = eval(&mut w, 0.004);
+            assert!(n.sticking && close(n.force[0], -10.0 * 0.004), "{n:?}");
             w.restore_state(&saved).unwrap();
             assert!(close(w.penalty_law(0).stick_scale, 1.0));
             w.stick_scale[0] = 0.3;

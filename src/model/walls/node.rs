@@ -49,12 +49,20 @@ pub(super) const STICK_FLOOR: f64 = 0.09;
 
 /// After a failed attempt: each node that switched between stick and slip at least
 /// [`CYCLING_FLIPS`] times gets its stick factor × [`STICK_CUT`], down to
-/// [`STICK_FLOOR`]. Returns whether any factor changed.
-pub fn soften_cycling(flips: &[u32], stick_scale: &mut [f64]) -> bool {
+/// [`STICK_FLOOR`], and its carried elastic slip (penalty's; zero under ALM) grows by
+/// the inverse, so its stick force μ f_N (s/δ) e at the start of the step is unchanged:
+/// the retry starts from the converged state's equilibrium, only the further slip meets
+/// the softer spring. (Softening the spring alone dropped every softened sticking node's
+/// force by 70 % at once; on `rubber-indent` with penalty the retries then started 6 %
+/// out of balance whatever the step, and more nodes cycled after each cut.) Returns
+/// whether any factor changed.
+pub fn soften_cycling(flips: &[u32], stick_scale: &mut [f64], slip_old: &mut [[f64; 3]]) -> bool {
     let mut changed = false;
-    for (f, s) in flips.iter().zip(stick_scale.iter_mut()) {
+    for ((f, s), e) in flips.iter().zip(stick_scale.iter_mut()).zip(slip_old) {
         if *f >= CYCLING_FLIPS && *s > STICK_FLOOR {
-            *s = (*s * STICK_CUT).max(STICK_FLOOR);
+            let soft = (*s * STICK_CUT).max(STICK_FLOOR);
+            e.iter_mut().for_each(|x| *x *= *s / soft);
+            *s = soft;
             changed = true;
         }
     }
@@ -256,7 +264,7 @@ impl Wall {
         let (fl, dfdg) = if alm_wall {
             self.alm_local(j, g, lam, decision, &mut e)
         } else {
-            self.penalty_local(j, g, &p, pose, pose_old, &mut e)
+            self.penalty_local(j, g, &p, [pose, pose_old], decision, &mut e)
         };
         node_rows(&mut e, &p, fl, &dfdg, &wp.hessian, alm_wall);
         e
@@ -318,8 +326,8 @@ impl Wall {
         j: usize,
         g: [f64; 3],
         p: &[[f64; 3]; 3],
-        pose: &Pose,
-        pose_old: &Pose,
+        [pose, pose_old]: [&Pose; 2],
+        decision: Decision,
         e: &mut NodeEval,
     ) -> ([f64; 3], [[f64; 3]; 3]) {
         // The elastic slip carried from the last step turns with the wall (or body) over
@@ -336,9 +344,10 @@ impl Wall {
             t1[0] * eo[0] + t1[1] * eo[1] + t1[2] * eo[2],
             t2[0] * eo[0] + t2[1] * eo[1] + t2[2] * eo[2],
         ];
-        let pt = penalty(g, eo_l, &self.penalty_law(j));
+        let pt = penalty(g, eo_l, &self.penalty_law(j), decision);
         e.c.active = pt.active;
         e.c.sticking = pt.sticking;
+        e.c.branch = pt.branch;
         let es = pt.elastic_slip;
         for i in 0..3 {
             e.slip_new[i] = t1[i] * es[0] + t2[i] * es[1];

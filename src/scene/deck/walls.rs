@@ -79,8 +79,9 @@ pub struct WallDeck {
     /// "augmented" (μ max(λ_N − g_N, 0)).
     #[serde(default)]
     pub friction_threshold: Threshold,
-    /// ALM: lock a node in stick after this many stick/slip flips within a step (within
-    /// a 2 % margin of the cone; 0 = never, the default).
+    /// Lock a node in stick after this many stick/slip flips within a step (0 = never,
+    /// the default): ALM within a 2 % margin of the cone, penalty up to 1.02 × its
+    /// allowable elastic slip (its friction force up to 2 % above μ f_N).
     #[serde(default)]
     pub stick_lock_flips: u32,
     /// Prescribed rigid motion (walls), or the entity's prescribed and free DOFs.
