@@ -76,12 +76,12 @@ pub fn run_static(
     let n = model.n_owned_dofs();
     u.resize(n, 0.0);
     let mut r = vec![0.0; n];
-    // The options as given, and for the retries of a step that failed with stick/slip
-    // cycling where line search is left to `auto`: Armijo on every correction (the full
-    // Newton steps are what carries nodes across the friction cone and back; penalty
-    // friction on the seal and rubber-indent finishes only so).
-    let (given, armijo) = (opts.clone(), retry_options(opts));
-    let mut solver = model_solver(comm, model, &given);
+    // For the retries of a step that failed with stick/slip cycling where line search is
+    // left to `auto`: Armijo on every correction (the full Newton steps are what carries
+    // nodes across the friction cone and back; penalty friction on the seal finishes
+    // only so).
+    let armijo = retry_options(opts);
+    let mut solver = model_solver(comm, model, opts);
     if let Some(a) = resume.and_then(|r| r.auto.clone()) {
         solver.auto = a;
     }
@@ -149,7 +149,7 @@ pub fn run_static(
             continue;
         }
         model.commit();
-        solver.opts = &given;
+        solver.opts = opts;
         let du: Vec<f64> = trial.iter().zip(u.iter()).map(|(a, b)| a - b).collect();
         last = Some((du, t - t_n));
         failed = false;
