@@ -292,10 +292,11 @@ impl<const N: usize, const G: usize, const A: usize> Local<'_, N, G, A> {
                 }
                 p.finv[g] = cofactor(&fm).transpose() / j;
             }
-            let sp = mat
+            let sp = self
+                .e
                 .evaluate(
                     &fm,
-                    &self.e.state_old[g * ns..(g + 1) * ns],
+                    g * ns..(g + 1) * ns,
                     &mut state_new[g * ns..(g + 1) * ns],
                 )
                 .map_err(material_at(At::Gauss(g)))?;
@@ -426,7 +427,9 @@ fn force<S: EasShape<N, G, A>, const N: usize, const G: usize, const A: usize>(
     assert_eq!(state_new.len(), G * ns + A, "EAS history length");
     let finite = e.mat.kinematics() == Kinematics::Finite;
     let r = reference::<S, N, G, A>(nodes(e.x0))?;
-    let alpha0: [f64; A] = std::array::from_fn(|i| e.state_old[G * ns + i]);
+    // A frozen product starts from the iterate's α: one or two local iterations.
+    let start = e.branch.unwrap_or(e.state_old);
+    let alpha0: [f64; A] = std::array::from_fn(|i| start[G * ns + i]);
     let local = Local {
         r: &r,
         u: nodes(e.u),

@@ -206,14 +206,11 @@ fn core<const N: usize, const G: usize>(
     let a = jbar * (dp - jbar * u2);
     f.fill(0.0);
     for (g, q) in pts.iter().enumerate() {
-        let (old, new) = (
-            &state_old[g * ns..(g + 1) * ns],
-            &mut state_new[g * ns..(g + 1) * ns],
-        );
+        let (at, new) = (g * ns..(g + 1) * ns, &mut state_new[g * ns..(g + 1) * ns]);
         match k.as_deref_mut() {
             Some(k) => {
-                let mut sp: StressPoint = mat
-                    .evaluate(&q.f, old, new)
+                let mut sp: StressPoint = e
+                    .evaluate(&q.f, at, new)
                     .map_err(material_at(At::Gauss(g)))?;
                 for r in 0..3 {
                     sp.stress[r] += jbar * dp;
@@ -228,8 +225,8 @@ fn core<const N: usize, const G: usize>(
                 add_fbar_tangent(&q.grad, &gbar, &sp, true, q.w, k);
             }
             None => {
-                let mut s = mat
-                    .evaluate_stress(&q.f, old, new)
+                let mut s = e
+                    .evaluate_stress(&q.f, at, new)
                     .map_err(material_at(At::Gauss(g)))?;
                 for si in s.iter_mut().take(3) {
                     *si += jbar * dp;

@@ -17,7 +17,9 @@
 //! [`super::element::kernel`].
 
 use super::error::ElementError;
-use crate::material::Material;
+use crate::material::{Material, MaterialError, StressPoint};
+use nalgebra::Matrix3;
+use std::ops::Range;
 
 /// What a kernel reads: one element's nodes, its own unknowns, material and committed
 /// history.
@@ -32,6 +34,11 @@ pub struct ElementData<'a> {
     pub mat: &'a dyn Material,
     /// Committed history, [`ElementKernel::state_len`] values.
     pub state_old: &'a [f64],
+    /// JFNK's frozen products: the trial history of the last natural evaluation at the
+    /// Newton iterate (same layout as `state_old`). Each point then takes the branch it
+    /// took there ([`Material::evaluate_on`]) and an EAS element starts its enhanced
+    /// solve from the α found there.
+    pub branch: Option<&'a [f64]>,
 }
 
 impl<'a> ElementData<'a> {
@@ -48,12 +55,47 @@ impl<'a> ElementData<'a> {
             own: &[],
             mat,
             state_old,
+            branch: None,
         }
     }
 
     /// The same element with its own unknowns.
     pub fn with_own(self, own: &'a [f64]) -> Self {
         Self { own, ..self }
+    }
+
+    /// The same element on the branches of a natural evaluation's trial history.
+    pub fn on_branch(self, branch: Option<&'a [f64]>) -> Self {
+        Self { branch, ..self }
+    }
+
+    /// Stress and tangent at the point whose history is `at` (a range of `state_old`),
+    /// on the frozen branch if there is one.
+    pub(super) fn evaluate(
+        &self,
+        f: &Matrix3<f64>,
+        at: Range<usize>,
+        new: &mut [f64],
+    ) -> Result<StressPoint, MaterialError> {
+        let old = &self.state_old[at.clone()];
+        match self.branch {
+            Some(b) => self.mat.evaluate_on(f, old, &b[at], new),
+            None => self.mat.evaluate(f, old, new),
+        }
+    }
+
+    /// The stress alone at the point whose history is `at` (see [`Self::evaluate`]).
+    pub(super) fn evaluate_stress(
+        &self,
+        f: &Matrix3<f64>,
+        at: Range<usize>,
+        new: &mut [f64],
+    ) -> Result<[f64; 6], MaterialError> {
+        let old = &self.state_old[at.clone()];
+        match self.branch {
+            Some(b) => self.mat.evaluate_stress_on(f, old, &b[at], new),
+            None => self.mat.evaluate_stress(f, old, new),
+        }
     }
 }
 

@@ -36,6 +36,9 @@ pub struct PatchData<'a> {
     pub mat: &'a dyn Material,
     /// Committed history, `n_state` values per tet, tet by tet.
     pub state_old: &'a [f64],
+    /// JFNK's frozen products: the last natural evaluation's trial history, whose
+    /// branches each tet keeps (see [`super::kernel::ElementData::branch`]).
+    pub branch: Option<&'a [f64]>,
 }
 
 /// An element failure in a patch: which tet (index into [`PatchData::tets`]) and why.
@@ -223,13 +226,16 @@ pub fn force(
             &p.state_old[t * ns..(t + 1) * ns],
             &mut state_new[t * ns..(t + 1) * ns],
         );
+        let branch = p.branch.map(|b| &b[t * ns..(t + 1) * ns]);
         let mut ft = [0.0; 12];
         match k.as_deref_mut() {
             Some(k) => {
-                let mut sp = mat
-                    .evaluate(&pt.f, old, new)
-                    .map_err(material_at(At::Centroid))
-                    .map_err(fail)?;
+                let mut sp = match branch {
+                    Some(b) => mat.evaluate_on(&pt.f, old, b, new),
+                    None => mat.evaluate(&pt.f, old, new),
+                }
+                .map_err(material_at(At::Centroid))
+                .map_err(fail)?;
                 if let Some(pr) = &pressure {
                     pr.modify(&mut sp);
                 }
@@ -249,10 +255,12 @@ pub fn force(
                 add_patch_fbar_tangent(pt, tet, &geo.gbar, &sp, finite, dofs, k);
             }
             None => {
-                let mut s = mat
-                    .evaluate_stress(&pt.f, old, new)
-                    .map_err(material_at(At::Centroid))
-                    .map_err(fail)?;
+                let mut s = match branch {
+                    Some(b) => mat.evaluate_stress_on(&pt.f, old, b, new),
+                    None => mat.evaluate_stress(&pt.f, old, new),
+                }
+                .map_err(material_at(At::Centroid))
+                .map_err(fail)?;
                 if let Some(pr) = &pressure {
                     for si in s.iter_mut().take(3) {
                         *si += pr.extra();
@@ -457,6 +465,7 @@ mod tests {
             tets: &local,
             mat: &mat,
             state_old: &[],
+            branch: None,
         };
         let (mut f, mut k) = (vec![0.0; 12], vec![0.0; 144]);
         force(&p, None, &mut [], &mut f, Some(&mut k)).unwrap();
@@ -488,6 +497,7 @@ mod tests {
                     tets: &tets,
                     mat,
                     state_old: &[],
+                    branch: None,
                 };
                 let mut f = vec![0.0; 3 * m];
                 force(&p, None, &mut [], &mut f, k).unwrap();
@@ -531,6 +541,7 @@ mod tests {
                 tets: &tets,
                 mat: &mat,
                 state_old: &[],
+                branch: None,
             };
             let mut f = vec![0.0; dofs];
             force(&p, Some(pi), &mut [], &mut f, k).unwrap();
@@ -568,6 +579,7 @@ mod tests {
             tets: &tets,
             mat: &mat,
             state_old: &[],
+            branch: None,
         };
         let geo = kinematics(&p, Kinematics::Finite).unwrap();
         let pr = Pressure::new(&mat, &geo, 0.0).unwrap();
@@ -601,6 +613,7 @@ mod tests {
             tets: &tets,
             mat: &mat,
             state_old: &[],
+            branch: None,
         };
         let sig = stresses(&p, None).unwrap();
         for s in &sig[1..] {

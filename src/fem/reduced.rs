@@ -188,7 +188,9 @@ fn force(e: &ElementData, hourglass: f64, out: ElementOutput) -> Result<(), Elem
     let k = match k {
         Some(k) => {
             assert_eq!(k.len(), 576, "tangent slice length");
-            let sp = mat.evaluate(&fm, state_old, state_new).map_err(merr)?;
+            let sp = e
+                .evaluate(&fm, 0..state_old.len(), state_new)
+                .map_err(merr)?;
             add_force(&grad, &sp.stress, r.vol, f);
             let mut kloc: LocalTangent<8> = [[[[0.0; 3]; 8]; 3]; 8];
             add_tangent(&grad, &sp, kin == Kinematics::Finite, r.vol, &mut kloc);
@@ -196,8 +198,8 @@ fn force(e: &ElementData, hourglass: f64, out: ElementOutput) -> Result<(), Elem
             Some(k)
         }
         None => {
-            let s = mat
-                .evaluate_stress(&fm, state_old, state_new)
+            let s = e
+                .evaluate_stress(&fm, 0..state_old.len(), state_new)
                 .map_err(merr)?;
             add_force(&grad, &s, r.vol, f);
             None

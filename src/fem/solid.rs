@@ -149,21 +149,18 @@ fn gauss_loop<const N: usize, const G: usize>(
     f: &mut [f64],
     mut k: Option<&mut LocalTangent<N>>,
 ) -> Result<(), ElementError> {
-    let (mat, state_old) = (e.mat, e.state_old);
+    let mat = e.mat;
     let ns = mat.n_state();
     let kin = mat.kinematics();
     let finite = kin == Kinematics::Finite;
     let (pts, gbar) = element_kinematics(tab, fbar, kin, nodes::<N>(e.x0), nodes::<N>(e.u))?;
     f.fill(0.0);
     for (g, p) in pts.iter().enumerate() {
-        let (old, new) = (
-            &state_old[g * ns..(g + 1) * ns],
-            &mut state_new[g * ns..(g + 1) * ns],
-        );
+        let (at, new) = (g * ns..(g + 1) * ns, &mut state_new[g * ns..(g + 1) * ns]);
         match k.as_deref_mut() {
             Some(k) => {
-                let sp = mat
-                    .evaluate(&p.f, old, new)
+                let sp = e
+                    .evaluate(&p.f, at, new)
                     .map_err(material_at(At::Gauss(g)))?;
                 add_force(&p.grad, &sp.stress, p.w, f);
                 add_tangent(&p.grad, &sp, finite, p.w, k);
@@ -173,8 +170,8 @@ fn gauss_loop<const N: usize, const G: usize>(
             }
             // A residual needs no tangent: the cheaper stress-only path.
             None => {
-                let s = mat
-                    .evaluate_stress(&p.f, old, new)
+                let s = e
+                    .evaluate_stress(&p.f, at, new)
                     .map_err(material_at(At::Gauss(g)))?;
                 add_force(&p.grad, &s, p.w, f);
             }

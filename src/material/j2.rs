@@ -104,6 +104,11 @@ impl J2Plasticity {
     }
 }
 
+/// Whether a trial history `branch` returned to the surface from `old` (ε̄ₚ grew).
+fn returned(old: &[f64], branch: &[f64]) -> bool {
+    matches!((old.get(6), branch.get(6)), (Some(a), Some(b)) if b > a)
+}
+
 /// θ = y coth y (→ 1 as y → 0).
 fn theta(y: f64) -> f64 {
     if y.abs() < 1e-4 {
@@ -120,12 +125,18 @@ const ON_SURFACE: f64 = 1e-6;
 
 impl J2Plasticity {
     /// Return mapping, history update, τ and, if `want_tangent`, c (zero otherwise).
+    /// `forced`: the branch to take (true: plastic) instead of the one Φ_tr picks; see
+    /// [`Material::evaluate_on`]. A forced plastic point below the surface takes the
+    /// return map's linear extension Δγ = Φ_tr / (3G + h(ε̄ₚ)) ≤ 0, which meets the
+    /// return map with its first derivative at Φ_tr = 0, so the stress is C¹ in F on
+    /// either side.
     fn update(
         &self,
         f: &Matrix3<f64>,
         state_old: &[f64],
         state_new: &mut [f64],
         want_tangent: bool,
+        forced: Option<bool>,
     ) -> Result<StressPoint, MaterialError> {
         check_f("J2", f)?;
         if state_old.len() < J2_N_STATE || state_new.len() < J2_N_STATE {
@@ -170,14 +181,21 @@ impl J2Plasticity {
         let q_tr = (1.5f64).sqrt() * s_norm;
         let (sy_n, _) = self.hardening.yield_stress(ep_n);
 
-        let plastic = q_tr - sy_n > 1e-12 * sy_n.abs();
+        let above = q_tr - sy_n > 1e-12 * sy_n.abs();
+        // A forced plastic point needs a flow direction (s_tr ≠ 0).
+        let plastic = forced.map_or(above, |p| p && q_tr > 1e-12 * sy_n.abs());
         let (dg, beta, coef_n, nhat) = if plastic {
-            let dg = self.return_map(q_tr, ep_n)?;
-            let (_, h) = self.hardening.yield_stress(ep_n + dg);
+            let (dg, h) = if above {
+                let dg = self.return_map(q_tr, ep_n)?;
+                (dg, self.hardening.yield_stress(ep_n + dg).1)
+            } else {
+                let (_, h) = self.hardening.yield_stress(ep_n);
+                ((q_tr - sy_n) / (3.0 * g + h), h)
+            };
             let beta = 1.0 - 3.0 * g * dg / q_tr;
             let coef = 6.0 * g * g * (dg / q_tr - 1.0 / (3.0 * g + h));
             (dg, beta, coef, s_tr / s_norm)
-        } else if ep_n > 0.0 && q_tr >= sy_n * (1.0 - ON_SURFACE) {
+        } else if forced.is_none() && ep_n > 0.0 && q_tr >= sy_n * (1.0 - ON_SURFACE) {
             // At a converged plastic state (the first iteration of the next step starts
             // there): the stress is the trial one, but continued loading is plastic, so
             // the tangent is the elastoplastic one at Δγ = 0 (the continuum tangent)
@@ -269,7 +287,7 @@ impl Material for J2Plasticity {
         state_old: &[f64],
         state_new: &mut [f64],
     ) -> Result<StressPoint, MaterialError> {
-        self.update(f, state_old, state_new, true)
+        self.update(f, state_old, state_new, true, None)
     }
 
     fn evaluate_stress(
@@ -278,7 +296,35 @@ impl Material for J2Plasticity {
         state_old: &[f64],
         state_new: &mut [f64],
     ) -> Result<[f64; 6], MaterialError> {
-        Ok(self.update(f, state_old, state_new, false)?.stress)
+        Ok(self.update(f, state_old, state_new, false, None)?.stress)
+    }
+
+    /// Plastic where the last natural evaluation returned (ε̄ₚ grew), elastic elsewhere.
+    fn evaluate_on(
+        &self,
+        f: &Matrix3<f64>,
+        state_old: &[f64],
+        branch: &[f64],
+        state_new: &mut [f64],
+    ) -> Result<StressPoint, MaterialError> {
+        self.update(
+            f,
+            state_old,
+            state_new,
+            true,
+            Some(returned(state_old, branch)),
+        )
+    }
+
+    fn evaluate_stress_on(
+        &self,
+        f: &Matrix3<f64>,
+        state_old: &[f64],
+        branch: &[f64],
+        state_new: &mut [f64],
+    ) -> Result<[f64; 6], MaterialError> {
+        let plastic = Some(returned(state_old, branch));
+        Ok(self.update(f, state_old, state_new, false, plastic)?.stress)
     }
 
     fn equivalent_plastic_strain(&self, state: &[f64]) -> Option<f64> {
@@ -350,6 +396,88 @@ mod tests {
         }
         // The elastic tangent's c_xxxx is about K + 4G/3; the elastoplastic one far less.
         assert!((sp.tangent[0][0] - (m.k() + 4.0 / 3.0 * m.g())).abs() > 0.1 * E);
+    }
+
+    /// JFNK's frozen products (`evaluate_stress_on`): on the iterate's plastic branch
+    /// the stress stays on that branch past the yield surface (the return map's linear
+    /// extension), so a one-sided difference across the surface is the consistent
+    /// tangent's product; the natural evaluation's difference is not. At the iterate
+    /// itself both agree exactly, and an elastic branch gives the trial stress.
+    #[test]
+    fn frozen_branch_difference_is_the_tangent_across_the_surface() {
+        let m = J2Plasticity::new(
+            E,
+            NU,
+            Hardening::Power {
+                sigma_y0: SY0,
+                k: 400.0,
+                n: 0.25,
+            },
+            1.0,
+        );
+        let d = diag(1.0, -0.5, -0.5);
+        let f0 = diag(1.01, 0.996, 0.996);
+        let (_, old) = eval(&m, &f0, &[0.0; J2_N_STATE]);
+        // A little further along the loading path: plastic, about 5 MPa over the surface.
+        let f = (Matrix3::identity() + d * 2e-5) * f0;
+        let (sp, branch) = eval(&m, &f, &old);
+        assert!(branch[6] > old[6], "the iterate is plastic");
+        let mut scratch = [0.0; J2_N_STATE];
+        let on = m
+            .evaluate_stress_on(&f, &old, &branch, &mut scratch)
+            .unwrap();
+        assert_eq!(
+            on, sp.stress,
+            "the frozen branch at the iterate is the natural one"
+        );
+        // Unloading by twice that: the natural evaluation turns elastic halfway.
+        let (h, l) = (4e-5, -d);
+        let fh = (Matrix3::identity() + l * h) * f;
+        let (_, natural_new) = eval(&m, &fh, &old);
+        assert_eq!(natural_new[6], old[6], "the perturbed state is elastic");
+        let t0 = from_voigt(&sp.stress);
+        let rate = |s: [f64; 6]| (from_voigt(&s) - t0) / h;
+        // c:sym(L) + Lτ + τLᵀ with engineering shear (L is diagonal here).
+        let lv = [l[(0, 0)], l[(1, 1)], l[(2, 2)]];
+        let want = Matrix3::from_fn(|r, c| {
+            if r != c {
+                return 0.0;
+            }
+            (0..3).map(|k| sp.tangent[r][k] * lv[k]).sum::<f64>() + 2.0 * lv[r] * t0[(r, r)]
+        });
+        let err = |got: Matrix3<f64>| (got - want).amax() / want.amax();
+        let frozen = m
+            .evaluate_stress_on(&fh, &old, &branch, &mut scratch)
+            .unwrap();
+        assert!(
+            scratch[6] < old[6],
+            "below the surface the extension returns Δγ < 0"
+        );
+        let natural = m.evaluate_stress(&fh, &old, &mut scratch).unwrap();
+        // 1e-2: the hardening modulus changes along the path (power law), a second-order
+        // term (3.5e-3 here); across the kink the natural one is 32 (3200 %).
+        assert!(
+            err(rate(frozen)) < 1e-2,
+            "frozen: {:.2e}",
+            err(rate(frozen))
+        );
+        assert!(
+            err(rate(natural)) > 0.1,
+            "natural: {:.2e}",
+            err(rate(natural))
+        );
+        // On the elastic branch (the committed history) the stress is the trial one,
+        // outside the surface the natural return lands on.
+        let elastic = m.evaluate_stress_on(&f, &old, &old, &mut scratch).unwrap();
+        assert_eq!(scratch[6], old[6]);
+        let mises = |s: &[f64; 6]| {
+            let t = from_voigt(s);
+            let dev = t - Matrix3::identity() * (t.trace() / 3.0);
+            (1.5 * dev.norm_squared()).sqrt()
+        };
+        let (sy, _) = m.hardening.yield_stress(branch[6]);
+        assert!((mises(&sp.stress) - sy).abs() < 1e-9 * sy);
+        assert!(mises(&elastic) > sy + 1.0, "{} vs {sy}", mises(&elastic));
     }
 
     fn linear() -> J2Plasticity {

@@ -69,6 +69,31 @@ pub trait Material: Send + Sync + std::fmt::Debug {
     ) -> Result<[f64; 6], MaterialError> {
         Ok(self.evaluate(f, state_old, state_new)?.stress)
     }
+    /// [`Material::evaluate`] on a fixed branch of a model with branches (J2's elastic
+    /// and plastic return): `branch` is the trial history of the last natural
+    /// evaluation at the Newton iterate, and the point takes the branch it took there.
+    /// JFNK's difference products evaluate so ([`crate::model::Evaluation::frozen`]):
+    /// a perturbation that crosses the yield surface would otherwise make J·v nonlinear
+    /// in v. Models without branches ignore `branch`.
+    fn evaluate_on(
+        &self,
+        f: &Matrix3<f64>,
+        state_old: &[f64],
+        _branch: &[f64],
+        state_new: &mut [f64],
+    ) -> Result<StressPoint, MaterialError> {
+        self.evaluate(f, state_old, state_new)
+    }
+    /// The stress alone on a fixed branch (see [`Material::evaluate_on`]).
+    fn evaluate_stress_on(
+        &self,
+        f: &Matrix3<f64>,
+        state_old: &[f64],
+        _branch: &[f64],
+        state_new: &mut [f64],
+    ) -> Result<[f64; 6], MaterialError> {
+        self.evaluate_stress(f, state_old, state_new)
+    }
     /// The volumetric part of an energy that splits as W = W₁(F) + U(J), for the hybrid
     /// element ([`crate::fem::hybrid`]): U'(J) (the Cauchy pressure it makes, τ_vol =
     /// J U'(J) I) and U''(J). `None` for a model without that split (the small-strain

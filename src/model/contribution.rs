@@ -87,8 +87,9 @@ pub struct Evaluation<'a> {
     /// are sent to their owners by the matrix).
     pub jacobian: Option<&'a mut DistMatrix>,
     /// A perturbed state of a finite-difference product (JFNK): a contribution with
-    /// branches (contact) evaluates on the branch of its last evaluation and changes no
-    /// state, so J·v does not straddle a kink.
+    /// branches (contact's active and stick/slip sets, the solids' elastic and plastic
+    /// points) evaluates on the branch of its last evaluation and changes no state, so
+    /// J·v does not straddle a kink.
     pub frozen: bool,
 }
 

@@ -27,12 +27,18 @@ pub(super) struct Patches {
 }
 
 /// Per-patch work arrays, reused across patches.
+/// A patch force's history: committed values, per-element offsets, a frozen product's
+/// branches, and where the trial history goes.
+pub(super) type History<'a> = (&'a [f64], &'a [usize], Option<&'a [f64]>, &'a mut [f64]);
+
 #[derive(Default)]
 pub(super) struct Scratch {
     x0: Vec<[f64; 3]>,
     u: Vec<[f64; 3]>,
     old: Vec<f64>,
     new: Vec<f64>,
+    /// A frozen product's branches (the natural evaluation's trial history).
+    branch: Vec<f64>,
     /// The last patch's residual rows and tangent.
     pub(super) f: Vec<f64>,
     pub(super) k: Vec<f64>,
@@ -116,7 +122,8 @@ impl Patches {
     /// Residual rows (into `s.f`) and, if `want_k`, tangent (into `s.k`) of patch `i`,
     /// with its pressure block `pi` if it is hybrid (`None`: condensed, the F-bar patch);
     /// its elements' trial history goes to `state_new`. An error names the mesh element
-    /// (`orig`) that failed.
+    /// (`orig`) that failed. With `branch` (a frozen product) every tet keeps the branch
+    /// of that trial history ([`crate::fem::kernel::ElementData::branch`]).
     #[allow(clippy::too_many_arguments)]
     pub(super) fn force(
         &self,
@@ -126,12 +133,18 @@ impl Patches {
         u: &[f64],
         mat: &dyn Material,
         pi: Option<&[f64; 3]>,
-        (state_old, offset, state_new): (&[f64], &[usize], &mut [f64]),
+        (state_old, offset, branch, state_new): History,
         orig: &[u64],
         want_k: bool,
     ) -> Result<(), String> {
         self.gather(i, s, coords, u, state_old, offset);
         let p = &self.list[i];
+        s.branch.clear();
+        if let Some(b) = branch {
+            for &e in &p.elems {
+                s.branch.extend_from_slice(&b[offset[e]..offset[e + 1]]);
+            }
+        }
         let dofs = 3 * p.nodes.len() + if pi.is_some() { 3 } else { 0 };
         s.f.resize(dofs, 0.0);
         s.k.resize(if want_k { dofs * dofs } else { 0 }, 0.0);
@@ -141,6 +154,7 @@ impl Patches {
             tets: &p.tets,
             mat,
             state_old: &s.old,
+            branch: branch.map(|_| &s.branch[..]),
         };
         let k = if want_k { Some(&mut s.k[..]) } else { None };
         patch::force(&data, pi, &mut s.new, &mut s.f, k).map_err(|e| {
@@ -180,6 +194,7 @@ impl Patches {
             tets: &p.tets,
             mat,
             state_old: &s.old,
+            branch: None,
         };
         match patch::stresses(&data, pi) {
             Ok(sig) => {

@@ -29,6 +29,9 @@ pub struct Solids {
     /// History at the start of the step (committed) and at the last evaluation.
     pub(crate) state_old: Vec<f64>,
     pub(crate) state_new: Vec<f64>,
+    /// A frozen product's trial history (discarded): `state_new` keeps the natural
+    /// evaluation's, whose branches the product takes. Sized on first use.
+    state_frozen: Vec<f64>,
     /// Element evaluations so far (for rates).
     pub evaluations: u64,
     /// Parts whose largest element von Mises stress is a column `<part>.max_von_mises`.
@@ -95,6 +98,7 @@ impl Solids {
             state_offset,
             state_old: vec![0.0; s],
             state_new: vec![0.0; s],
+            state_frozen: Vec::new(),
             evaluations: 0,
             peak_stress_parts: Vec::new(),
             part_names: Vec::new(),
@@ -178,7 +182,12 @@ impl Solids {
         let mut trial = self.state_old.clone();
         for i in 0..self.patches.len() {
             let p = &self.patches.list[i];
-            let history = (&self.state_old[..], &self.state_offset[..], &mut trial[..]);
+            let history = (
+                &self.state_old[..],
+                &self.state_offset[..],
+                None,
+                &mut trial[..],
+            );
             let mat = self.material(p.elems[0]);
             let orig = &self.elements.orig;
             if self
@@ -352,6 +361,12 @@ impl Contribution for Solids {
         let want_k = ev.jacobian.is_some();
         let mut ke = vec![0.0; if want_k { MAX_DOFS * MAX_DOFS } else { 0 }];
         let mut blocks = [0usize; MAX_DOFS / 3];
+        // A frozen product (JFNK) keeps each point's return-map branch of the last
+        // natural evaluation (`state_new`) and writes its own trial history aside.
+        let frozen = ev.frozen && !self.state_new.is_empty();
+        if frozen {
+            self.state_frozen.resize(self.state_new.len(), 0.0);
+        }
         for e in 0..self.len() {
             if self.patches.member[e] {
                 continue;
@@ -362,11 +377,18 @@ impl Contribution for Solids {
             let (ob, no) = self.own_blocks(e);
             let kernel = self.kernels[self.kernel_of[e] as usize].as_ref();
             let nd = kernel.n_dofs();
+            let (branch, trial) = if frozen {
+                let b = Some(&self.state_new[s0..s1]);
+                (b, &mut self.state_frozen[s0..s1])
+            } else {
+                (None, &mut self.state_new[s0..s1])
+            };
             let res = kernel.force(
                 &ElementData::new(&x0[..n], &ue[..n], mat, &self.state_old[s0..s1])
-                    .with_own(&ev.u[3 * ob..3 * (ob + no)]),
+                    .with_own(&ev.u[3 * ob..3 * (ob + no)])
+                    .on_branch(branch),
                 ElementOutput::new(
-                    &mut self.state_new[s0..s1],
+                    trial,
                     &mut fe[..nd],
                     if want_k {
                         Some(&mut ke[..nd * nd])
@@ -394,11 +416,14 @@ impl Contribution for Solids {
         for i in 0..self.patches.len() {
             let p = &self.patches.list[i];
             let mat = self.materials[self.elements.material[p.elems[0]] as usize].as_ref();
-            let history = (
-                &self.state_old[..],
-                &self.state_offset[..],
-                &mut self.state_new[..],
-            );
+            let history = if frozen {
+                let b = Some(&self.state_new[..]);
+                let offset = &self.state_offset[..];
+                (&self.state_old[..], offset, b, &mut self.state_frozen[..])
+            } else {
+                let offset = &self.state_offset[..];
+                (&self.state_old[..], offset, None, &mut self.state_new[..])
+            };
             let orig = &self.elements.orig;
             let own = p.own.map(|o| self.own_first + self.n_own_elements + o);
             let pi: Option<&[f64; 3]> =
