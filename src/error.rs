@@ -14,6 +14,9 @@ pub enum ErrorKind {
     Convergence,
     /// Anything else: file system, HDF5, MPI.
     Runtime,
+    /// Ended by a signal after a converged step ([`crate::app::interrupt`]): exit
+    /// status 128 + the signal's number.
+    Interrupted(i32),
 }
 
 #[derive(Debug, Clone)]
@@ -37,6 +40,13 @@ impl Error {
             message: message.into(),
         }
     }
+    /// A run ended by signal `sig`; `message` is its summary's headline.
+    pub fn interrupted(sig: i32, message: impl Into<String>) -> Self {
+        Self {
+            kind: ErrorKind::Interrupted(sig),
+            message: message.into(),
+        }
+    }
     pub fn runtime(message: impl Into<String>) -> Self {
         Self {
             kind: ErrorKind::Runtime,
@@ -48,6 +58,7 @@ impl Error {
             ErrorKind::Input => 2,
             ErrorKind::Convergence => 3,
             ErrorKind::Runtime => 1,
+            ErrorKind::Interrupted(sig) => 128 + sig,
         }
     }
     /// Prefix the message with context ("deck foo.toml: ...").

@@ -432,14 +432,21 @@ fn main() {
             mpi::ffi::MPI_Abort(mpi::ffi::RSMPI_COMM_WORLD, 101);
         }
     }));
+    // After MPI's own set-up, so these handlers are the ones that run.
+    if let Err(e) = app::interrupt::install() {
+        eprintln!("alfe: warning: SIGINT/SIGTERM will not stop a run cleanly: {e}");
+    }
     let comm = MpiComm::new(universe.world());
     let raw: Vec<String> = std::env::args().skip(1).collect();
     let res = main_inner(&comm, raw);
     let code = match &res {
         Ok(()) => 0,
         Err(e) => {
-            if comm.rank() == 0 {
-                eprintln!("alfe: error: {e}");
+            match e.kind {
+                // The summary's headline: not an error of the run's input or solver.
+                alfe::ErrorKind::Interrupted(_) if comm.rank() == 0 => eprintln!("{e}"),
+                _ if comm.rank() == 0 => eprintln!("alfe: error: {e}"),
+                _ => {}
             }
             e.exit_code()
         }

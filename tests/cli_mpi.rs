@@ -1640,3 +1640,89 @@ fn partition_files_are_read_with_a_size_limit() {
         "{se}"
     );
 }
+
+/// SIGINT (Ctrl-C) on 1 rank, and SIGTERM sent to one of 2 ranks only: the run ends at
+/// its next converged step with everything written (summary, history, readable HDF5,
+/// each rank's restart file), exit status 128 + signal, both ranks at the same step; the
+/// 1-rank run goes on from there with `--restart` to the end.
+#[test]
+fn a_signal_stops_the_run_at_a_converged_step() {
+    let dir = temp_dir("signal");
+    for (ranks, sig, name) in [(1usize, "INT", "SIGINT"), (2, "TERM", "SIGTERM")] {
+        let out = format!("sig-{ranks}");
+        let _one = LAUNCH.lock().unwrap_or_else(|e| e.into_inner());
+        let mut cmd = Command::new("timeout");
+        cmd.arg("300");
+        if ranks > 1 {
+            cmd.args(["mpirun", "--oversubscribe", "-n", "2"]);
+        }
+        cmd.args([ALFE, "run", "twisted-block", "-q", "-o", &out])
+            .current_dir(&dir)
+            .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
+            .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
+            .env("OMPI_MCA_mpi_yield_when_idle", "1")
+            .stdout(std::process::Stdio::piped())
+            .stderr(std::process::Stdio::piped());
+        let child = cmd.spawn().expect("cannot launch alfe");
+        // Two converged steps of ten, then the signal to the (last) rank's process only.
+        let hist = dir.join(&out).join("history.csv");
+        let t0 = std::time::Instant::now();
+        while std::fs::read_to_string(&hist).map_or(0, |h| h.lines().count()) < 3 {
+            assert!(t0.elapsed().as_secs() < 200, "no steps written");
+            std::thread::sleep(std::time::Duration::from_millis(50));
+        }
+        let pattern = format!("^{ALFE} run twisted-block -q -o {out}$");
+        let pids = Command::new("pgrep")
+            .args(["-f", &pattern])
+            .output()
+            .unwrap();
+        let pids = String::from_utf8_lossy(&pids.stdout).to_string();
+        let pids: Vec<&str> = pids.split_whitespace().collect();
+        assert_eq!(pids.len(), ranks, "rank processes: {pids:?}");
+        let sent = Command::new("kill")
+            .args([&format!("-{sig}"), pids[ranks - 1]])
+            .status()
+            .unwrap();
+        assert!(sent.success());
+        let o = child.wait_with_output().unwrap();
+        let (_, se) = text(&o);
+        let code = if sig == "INT" { 130 } else { 143 };
+        assert_eq!(
+            o.status.code(),
+            Some(code),
+            "{ranks} ranks, SIG{sig}:\n{se}"
+        );
+        let s: serde_json::Value = serde_json::from_str(
+            &std::fs::read_to_string(dir.join(&out).join("summary.json")).unwrap(),
+        )
+        .unwrap();
+        let n = s["steps"].as_u64().unwrap() as usize;
+        assert!((2..10).contains(&n), "stopped after {n} steps");
+        assert_eq!(s["stopped"], true);
+        assert_eq!(s["interrupted"], name);
+        assert!(
+            se.contains(&format!("stopped after step {n} by {name}")),
+            "{se}"
+        );
+        // Every converged step is in the HDF5 file (step 0 is the initial state) and in
+        // the history, and each rank left its restart file for the last one.
+        let u = read_u(&dir.join(&out).join("twisted-block.h5"));
+        assert_eq!(u.as_object().unwrap().len(), n + 1);
+        assert_eq!(history(&hist).len(), n + 1);
+        for r in 0..ranks {
+            let f = format!("restart/step-{n:06}.rank-{r}.bin");
+            assert!(dir.join(&out).join(&f).is_file(), "{f}");
+        }
+        drop(_one);
+        if ranks == 1 {
+            let again = alfe(&dir, 1, &["run", "--restart", &out, "-q"]);
+            assert!(again.status.success(), "{:?}", text(&again));
+            let s: serde_json::Value = serde_json::from_str(
+                &std::fs::read_to_string(dir.join(format!("{out}-restart/summary.json"))).unwrap(),
+            )
+            .unwrap();
+            assert_eq!(s["steps"].as_u64().unwrap() as usize, 10 - n);
+            assert_eq!(s["converged"], true);
+        }
+    }
+}

@@ -6,6 +6,7 @@
 mod check;
 pub mod export;
 pub mod import;
+pub mod interrupt;
 mod observe;
 mod progress;
 mod restart;

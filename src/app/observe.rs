@@ -1,7 +1,7 @@
 //! One observer for every kind of run: each converged step writes its history row
 //! (and, when the schedule says so, its fields and a restart file), its attempts to
 //! `iterations.csv` and its progress line, and says whether the run goes on
-//! (`--stop-after`).
+//! (`--stop-after`, or a signal: [`super::interrupt`]).
 
 use super::progress::Progress;
 use crate::model::Model;
@@ -30,6 +30,9 @@ pub(super) struct Observer<'a> {
     pub scene: String,
     pub deck_print: u64,
     pub stop_after: Option<usize>,
+    /// The signal that stopped the run at the last observed step
+    /// ([`super::interrupt`]).
+    pub interrupted: Option<i32>,
     /// The nonlinear solver's name for static progress lines; `None` in dynamic runs,
     /// which print a line per output time instead of per step.
     pub solver: Option<String>,
@@ -57,7 +60,11 @@ impl Observer<'_> {
             None if fields => self.progress.dynamic_step(rec, &self.set_names),
             None => {}
         }
+        if let Some(sig) = super::interrupt::agreed(self.comm) {
+            self.interrupted.get_or_insert(sig);
+        }
         let flow = match self.stop_after {
+            _ if self.interrupted.is_some() => Flow::Stop,
             Some(n) if rec.step >= n => Flow::Stop,
             _ => Flow::Continue,
         };

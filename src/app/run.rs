@@ -657,6 +657,7 @@ fn execute(
         scene: scene.clone(),
         deck_print: crate::output::checkpoint::fingerprint(&settings.echo),
         stop_after: opts.stop_after,
+        interrupted: None,
         solver: (kind == AnalysisKind::Static).then(|| nopts.kind.name().to_string()),
         set_names: model.reaction_sets.clone(),
     };
@@ -673,6 +674,7 @@ fn execute(
         progress,
         mut iters,
         records,
+        interrupted,
         ..
     } = obs;
     *log = progress.log;
@@ -730,6 +732,7 @@ fn execute(
         run: record,
         restarted_from: restarted_from(&restart),
         stopped: totals.stopped,
+        interrupted: interrupted.map(super::interrupt::name),
         quantities,
     };
     drop(writer);
@@ -740,6 +743,9 @@ fn execute(
             totals.steps,
             out.display()
         )));
+    }
+    if let Some(sig) = interrupted {
+        return Err(Error::interrupted(sig, summary.headline()));
     }
     Ok(RunOutcome {
         summary,

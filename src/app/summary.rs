@@ -71,8 +71,11 @@ pub struct Summary {
     /// A restart: the directory, step and time it went on from.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub restarted_from: Option<RestartedFrom>,
-    /// The run was stopped after a step on request (`--stop-after`).
+    /// The run was stopped after a step on request (`--stop-after`, or a signal).
     pub stopped: bool,
+    /// The signal that stopped it (`SIGINT`, `SIGTERM`), if one did.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub interrupted: Option<String>,
     /// The scene's quantities of interest over this run (rank 0's summary).
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub quantities: Vec<crate::output::quantities::QuantityValue>,
@@ -95,8 +98,12 @@ impl Summary {
     /// The one line a finished run ends with.
     pub fn headline(&self) -> String {
         if self.stopped {
+            let how = match &self.interrupted {
+                Some(sig) => format!("by {sig}"),
+                None => "as asked".into(),
+            };
             return format!(
-                "alfe: stopped after step {} as asked ({:.2} s); go on with `alfe run --restart {}`",
+                "alfe: stopped after step {} {how} ({:.2} s), everything written so far; go on with `alfe run --restart {}`",
                 self.run_steps_end(),
                 self.wall_time_s,
                 self.output_dir

@@ -29,7 +29,7 @@ pub fn on_rank0<T>(comm: &dyn Comm, f: impl FnOnce() -> Result<T>) -> Result<Opt
                 let code = match e.kind {
                     ErrorKind::Input => 1u8,
                     ErrorKind::Convergence => 2,
-                    ErrorKind::Runtime => 3,
+                    ErrorKind::Runtime | ErrorKind::Interrupted(_) => 3,
                 };
                 let mut m = vec![code];
                 m.extend_from_slice(e.message.as_bytes());
