@@ -17,8 +17,9 @@
 //! * Contact branches (active, stick, slip) and the return map's (elastic, plastic) are
 //!   frozen per Newton iteration in the products (`NonlinearProblem::residual_frozen`),
 //!   so J v is linear in v: the generalized Jacobian's product, not a difference across
-//!   a kink. On b-pillar the J2 freeze took the products' GMRES iterations per Newton
-//!   iteration through the snap from 5.5 to 4.6 (restart at 55 mm, 60–62 mm).
+//!   a kink. b-pillar from 55 to 64 mm (restart): GMRES per Newton iteration 5.75 →
+//!   4.91 with the J2 freeze, and GMRES no longer ends above its right-hand side at
+//!   64.3 mm, where JFNK failed without it.
 //! * A refresh when the nonlinear contraction is poor (‖r_{k+1}‖ > 0.5 ‖r_k‖) was tried:
 //!   cantilever 66 → 56 iterations, but sphere-roll on 2 ranks then stopped at t = 1.405
 //!   (also at 0.9); without it, it finishes. Only GMRES's count refreshes.
