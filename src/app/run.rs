@@ -599,6 +599,21 @@ struct Prepared {
     phases: Phases,
 }
 
+/// A run that failed (exit 3) or was stopped by a signal (128 + signal) is an error
+/// once its summary is written.
+fn ending(failure: Option<String>, interrupted: Option<i32>, summary: &Summary) -> Result<()> {
+    if let Some(f) = failure {
+        return Err(Error::convergence(format!(
+            "{f}; {} converged step(s) written to {}",
+            summary.steps, summary.output_dir
+        )));
+    }
+    match interrupted {
+        Some(sig) => Err(Error::interrupted(sig, summary.headline())),
+        None => Ok(()),
+    }
+}
+
 /// The analysis, the outputs and the summary of [`run`].
 fn execute(
     comm: &dyn Comm,
@@ -737,16 +752,7 @@ fn execute(
     };
     drop(writer);
     write_summary(comm, out, &summary)?;
-    if let Some(f) = totals.failure {
-        return Err(Error::convergence(format!(
-            "{f}; {} converged step(s) written to {}",
-            totals.steps,
-            out.display()
-        )));
-    }
-    if let Some(sig) = interrupted {
-        return Err(Error::interrupted(sig, summary.headline()));
-    }
+    ending(totals.failure, interrupted, &summary)?;
     Ok(RunOutcome {
         summary,
         u,
