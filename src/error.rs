@@ -14,7 +14,7 @@ pub enum ErrorKind {
     Convergence,
     /// Anything else: file system, HDF5, MPI.
     Runtime,
-    /// Ended by a signal after a converged step ([`crate::app::interrupt`]): exit
+    /// Ended by SIGINT or SIGTERM after a converged step (the run's summary written): exit
     /// status 128 + the signal's number.
     Interrupted(i32),
 }
