@@ -405,16 +405,7 @@ mod tests {
     /// itself both agree exactly, and an elastic branch gives the trial stress.
     #[test]
     fn frozen_branch_difference_is_the_tangent_across_the_surface() {
-        let m = J2Plasticity::new(
-            E,
-            NU,
-            Hardening::Power {
-                sigma_y0: SY0,
-                k: 400.0,
-                n: 0.25,
-            },
-            1.0,
-        );
+        let m = power();
         let d = diag(1.0, -0.5, -0.5);
         let f0 = diag(1.01, 0.996, 0.996);
         let (_, old) = eval(&m, &f0, &[0.0; J2_N_STATE]);
@@ -478,6 +469,20 @@ mod tests {
         let (sy, _) = m.hardening.yield_stress(branch[6]);
         assert!((mises(&sp.stress) - sy).abs() < 1e-9 * sy);
         assert!(mises(&elastic) > sy + 1.0, "{} vs {sy}", mises(&elastic));
+    }
+
+    /// Power-law hardening σ_y = σ_y0 + 400 ε̄ₚ^0.25 (nonlinear h).
+    fn power() -> J2Plasticity {
+        J2Plasticity::new(
+            E,
+            NU,
+            Hardening::Power {
+                sigma_y0: SY0,
+                k: 400.0,
+                n: 0.25,
+            },
+            1.0,
+        )
     }
 
     fn linear() -> J2Plasticity {
@@ -681,19 +686,7 @@ mod tests {
     /// (c) Large simple shear (γ up to 3 in 300 steps): no failure, det Cp⁻¹ = 1.
     #[test]
     fn large_simple_shear_keeps_plastic_incompressibility() {
-        for m in [
-            linear(),
-            J2Plasticity::new(
-                E,
-                NU,
-                Hardening::Power {
-                    sigma_y0: SY0,
-                    k: 400.0,
-                    n: 0.25,
-                },
-                1.0,
-            ),
-        ] {
+        for m in [linear(), power()] {
             let mut old = vec![0.0; J2_N_STATE];
             let n = 300;
             for k in 1..=n {
@@ -793,16 +786,6 @@ mod tests {
     /// on elastic unloading from it.
     #[test]
     fn tangent_matches_finite_difference_from_committed_state() {
-        let power = J2Plasticity::new(
-            E,
-            NU,
-            Hardening::Power {
-                sigma_y0: SY0,
-                k: 400.0,
-                n: 0.25,
-            },
-            1.0,
-        );
         let tab = J2Plasticity::new(
             E,
             NU,
@@ -811,7 +794,7 @@ mod tests {
             },
             1.0,
         );
-        for m in [linear(), power, tab] {
+        for m in [linear(), power(), tab] {
             let (f0, old) = loaded_state(&m);
             let mut steps = vec![];
             let mut g = Matrix3::identity();

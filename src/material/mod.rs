@@ -72,7 +72,7 @@ pub trait Material: Send + Sync + std::fmt::Debug {
     /// [`Material::evaluate`] on a fixed branch of a model with branches (J2's elastic
     /// and plastic return): `branch` is the trial history of the last natural
     /// evaluation at the Newton iterate, and the point takes the branch it took there.
-    /// JFNK's difference products evaluate so ([`crate::model::Evaluation::frozen`]):
+    /// JFNK's difference products evaluate so (the model's frozen evaluations):
     /// a perturbation that crosses the yield surface would otherwise make J·v nonlinear
     /// in v. Models without branches ignore `branch`.
     fn evaluate_on(
@@ -95,7 +95,7 @@ pub trait Material: Send + Sync + std::fmt::Debug {
         self.evaluate_stress(f, state_old, state_new)
     }
     /// The volumetric part of an energy that splits as W = W₁(F) + U(J), for the hybrid
-    /// element ([`crate::fem::hybrid`]): U'(J) (the Cauchy pressure it makes, τ_vol =
+    /// element (`fem::hybrid`): U'(J) (the Cauchy pressure it makes, τ_vol =
     /// J U'(J) I) and U''(J). `None` for a model without that split (the small-strain
     /// ones). W₁ need not be isochoric: the split only has to carry the bulk modulus.
     fn volumetric(&self, _j: f64) -> Option<(f64, f64)> {
