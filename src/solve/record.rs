@@ -77,6 +77,9 @@ pub struct SolverCounts {
     pub line_search_backtracks: usize,
     /// BFGS stiffness reforms.
     pub bfgs_reforms: usize,
+    /// JFNK directions solved on the Jacobian assembled at the iterate because GMRES
+    /// failed on the finite-difference products (also counted as factorizations).
+    pub jfnk_assembled_directions: usize,
     /// `auto`'s changes of method within increments, in all and by "from → to".
     pub solver_switches: usize,
     pub switches: std::collections::BTreeMap<String, usize>,
@@ -120,6 +123,7 @@ impl RunTotals {
         self.counts.predictor_solves += s.predictor_solves;
         self.counts.line_search_backtracks += s.backtracks;
         self.counts.bfgs_reforms += s.reforms;
+        self.counts.jfnk_assembled_directions += s.assembled_directions;
         self.counts.solver_switches += s.switches.len();
         for w in &s.switches {
             *self

@@ -251,6 +251,7 @@ pub fn merge(total: &mut SolveStats, s: SolveStats) {
     total.predictor_solves += s.predictor_solves;
     total.backtracks += s.backtracks;
     total.reforms += s.reforms;
+    total.assembled_directions += s.assembled_directions;
     total.method = s.method;
 }
 

@@ -583,6 +583,9 @@ impl<'a> SolverContext<'a> {
             for i in 0..self.u.len() {
                 self.u[i] = base[i] + lambda * du[i];
             }
+            if k > 0 {
+                self.stats.backtracks += 1;
+            }
             let ev = self.evaluate()?;
             if let Some(ev) = ev {
                 if ev.rn <= (1.0 - 1e-4 * lambda) * rn0 || k == max_halvings {

@@ -260,6 +260,9 @@ pub struct SolveStats {
     pub backtracks: usize,
     /// BFGS reforms (stiffness reassembled and refactored).
     pub reforms: usize,
+    /// JFNK directions solved on the assembled Jacobian after GMRES failed on the
+    /// finite-difference products.
+    pub assembled_directions: usize,
     /// The method (variant) of the last attempt: the one that converged, if any.
     pub method: &'static str,
     /// `auto`'s changes of method within the increment.
