@@ -3,6 +3,7 @@
 //! The distributed linear algebra they use is [`crate::linalg`].
 
 pub mod analysis;
+pub mod armijo;
 pub mod control;
 pub mod nonlinear;
 pub mod record;

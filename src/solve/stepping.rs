@@ -6,10 +6,9 @@
 use crate::linalg::matrix::DistMatrix;
 use crate::model::Model;
 use crate::parallel::Comm;
+use crate::solve::armijo::ArmijoMemory;
 use crate::solve::control::StepControl;
-use crate::solve::nonlinear::{
-    Failure, LineSearch, NonlinearOptions, NonlinearProblem, Preconditioning, Solver, Start,
-};
+use crate::solve::nonlinear::{NonlinearOptions, NonlinearProblem, Preconditioning, Solver, Start};
 pub use crate::solve::record::{Attempt, Flow, Resume, RunTotals, StageTotals, StepRecord};
 use crate::solve::{Analysis, Predictor};
 use crate::Result;
@@ -44,15 +43,6 @@ pub fn model_solver<'o>(comm: &dyn Comm, model: &Model, opts: &'o NonlinearOptio
     Solver::new(opts, k, pc)
 }
 
-/// The options for the retries of a step that failed with stick/slip cycling: Armijo
-/// line search where `opts` leave it to `auto`; `None`: the same as `opts`.
-pub fn retry_options(opts: &NonlinearOptions) -> Option<NonlinearOptions> {
-    (opts.line_search == LineSearch::Auto).then(|| NonlinearOptions {
-        line_search: LineSearch::On,
-        ..opts.clone()
-    })
-}
-
 /// Called with every converged step, its solution, the model (output, progress) and
 /// how to resume after it (built only when asked for).
 pub type StepObserver<'a> =
@@ -76,11 +66,12 @@ pub fn run_static(
     let n = model.n_owned_dofs();
     u.resize(n, 0.0);
     let mut r = vec![0.0; n];
-    // For the retries of a step that failed with stick/slip cycling where line search is
-    // left to `auto`: Armijo on every correction (the full Newton steps are what carries
-    // nodes across the friction cone and back; penalty friction on the seal finishes
-    // only so).
-    let armijo = retry_options(opts);
+    // Where line search is left to `auto`: Armijo after failures (`armijo.rs`; with
+    // `auto` and BFGS for the retries of a step that failed with stick/slip cycling,
+    // where full Newton steps carry nodes across the friction cone and back: penalty
+    // friction on the seal finishes only so).
+    let mut armijo = ArmijoMemory::new(opts, true);
+    let with_armijo = armijo.armijo.clone();
     let mut solver = model_solver(comm, model, opts);
     if let Some(a) = resume.and_then(|r| r.auto.clone()) {
         solver.auto = a;
@@ -128,9 +119,8 @@ pub fn run_static(
             }
             model.after_failed_attempt();
             solver.pc.invalidate();
-            if let (Some(Failure::StickSlipCycling), Some(a)) = (stats.failure, &armijo) {
-                solver.opts = a;
-            }
+            armijo.failed(stats.failure);
+            solver.opts = armijo.pick(opts, &with_armijo);
             failed = true;
             let reason = stats.reason.clone();
             let kind = stats.failure;
@@ -149,7 +139,8 @@ pub fn run_static(
             continue;
         }
         model.commit();
-        solver.opts = opts;
+        armijo.converged(stats.backtracks);
+        solver.opts = armijo.pick(opts, &with_armijo);
         let du: Vec<f64> = trial.iter().zip(u.iter()).map(|(a, b)| a - b).collect();
         last = Some((du, t - t_n));
         failed = false;
@@ -183,30 +174,4 @@ pub fn run_static(
     }
     tot.converged = true;
     Ok(tot)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::solve::nonlinear::testing::options;
-    use crate::solve::nonlinear::SolverKind;
-
-    /// A step that failed with stick/slip cycling is retried with Armijo line search
-    /// where the deck leaves line search to `auto`, with every other option as given;
-    /// a line search the deck names (on or off) is kept.
-    #[test]
-    fn cycling_retries_take_armijo_where_line_search_is_auto() {
-        for kind in [SolverKind::Newton, SolverKind::Jfnk, SolverKind::Auto] {
-            let mut given = options(kind);
-            given.line_search = LineSearch::Auto;
-            given.max_iterations = 17;
-            let retry = retry_options(&given).expect("auto line search: Armijo retries");
-            assert_eq!(retry.line_search, LineSearch::On);
-            assert_eq!((retry.kind, retry.max_iterations), (kind, 17));
-            for named in [LineSearch::On, LineSearch::Off] {
-                given.line_search = named;
-                assert!(retry_options(&given).is_none(), "{named:?} is the deck's");
-            }
-        }
-    }
 }

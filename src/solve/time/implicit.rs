@@ -18,6 +18,7 @@ use crate::linalg::matrix::DistMatrix;
 use crate::model::dynamics::MassMatrix;
 use crate::model::Model;
 use crate::parallel::Comm;
+use crate::solve::armijo::ArmijoMemory;
 use crate::solve::control::StepControl;
 use crate::solve::nonlinear::{
     NonlinearOptions, NonlinearProblem, SolveStats, Solver, SolverKind, Start,
@@ -146,6 +147,9 @@ pub fn run_implicit(
     on_step: &mut DynObserver,
 ) -> Result<RunTotals> {
     let mut ctl = StepControl::new(analysis, opts.max_iterations);
+    // Armijo after failures where line search is left to `auto` (`armijo.rs`).
+    let mut armijo = ArmijoMemory::new(opts, false);
+    let with_armijo = armijo.armijo.clone();
     let mut run = Implicit::new(comm, model, analysis, opts);
     let t_start = Instant::now();
     let (mut energy, mut r_old) = match resume.and_then(|x| x.dynamic.as_ref().map(|d| (x, d))) {
@@ -173,11 +177,15 @@ pub fn run_implicit(
             if !run.reject(model, &mut ctl, stats, (t_done, t1)) {
                 return Ok(run.tot);
             }
+            armijo.failed(run.pending.last().and_then(|a| a.stats.failure));
+            run.solver.opts = armijo.pick(opts, &with_armijo);
             continue;
         }
         // Accept: the state at t_{n+1}, its forces, energies.
         let (react, en) = run.accept(model, state, &mut energy, &mut r_old, &trial, (h, t1))?;
         let (step, retries) = ctl.accept(t1, stats.iterations);
+        armijo.converged(stats.backtracks);
+        run.solver.opts = armijo.pick(opts, &with_armijo);
         run.tot.steps += 1;
         let rec = StepRecord {
             step,
