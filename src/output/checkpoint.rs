@@ -17,8 +17,9 @@ use std::path::{Path, PathBuf};
 /// Bumped when the layout changes: an older file is refused, not misread. 3: penalty
 /// contact carries its elastic slip (not its tangential force), pairs keep their
 /// contact, stick and stick softening, and `solver = "auto"` its learned state. 4:
-/// `auto`'s state lost its partition-dependent factor weight.
-pub const FORMAT: u32 = 4;
+/// `auto`'s state lost its partition-dependent factor weight. 5: the line search's
+/// memory (`ArmijoState`).
+pub const FORMAT: u32 = 5;
 
 #[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct Checkpoint {
@@ -175,6 +176,7 @@ mod tests {
                 last_increment: None,
                 dynamic: None,
                 auto: None,
+                armijo: Default::default(),
             },
         }
     }

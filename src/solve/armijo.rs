@@ -20,6 +20,15 @@ use super::nonlinear::{Failure, LineSearch, NonlinearOptions, SolverKind};
 /// Increments in a row converged without a backtrack after which full steps return.
 pub const CLEAN_INCREMENTS: usize = 5;
 
+/// Where the memory stands, for a restart to go on alike.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub struct ArmijoState {
+    /// Armijo is on now.
+    pub on: bool,
+    /// Increments in a row converged without a backtrack while on.
+    pub clean: usize,
+}
+
 /// What the step loop remembers of the line search (module doc).
 #[derive(Debug, Clone)]
 pub struct ArmijoMemory {
@@ -54,6 +63,20 @@ impl ArmijoMemory {
     /// Armijo is in force now.
     pub fn on(&self) -> bool {
         self.on
+    }
+
+    /// Where it stands (for a restart file).
+    pub fn state(&self) -> ArmijoState {
+        ArmijoState {
+            on: self.on,
+            clean: self.clean,
+        }
+    }
+
+    /// Go on from `s` (a restart).
+    pub fn resume(&mut self, s: ArmijoState) {
+        self.on = s.on && self.applies;
+        self.clean = s.clean;
     }
 
     /// The options in force: `armijo` (this memory's [`ArmijoMemory::armijo`]) when on,
@@ -143,6 +166,9 @@ mod tests {
                 m.converged(0);
             }
             assert!(m.on(), "a backtrack restarts the count");
+            let mut again = ArmijoMemory::new(&given(kind, LineSearch::Auto), false);
+            again.resume(m.state());
+            assert_eq!(again.state(), m.state(), "a restart goes on alike");
             m.converged(0);
             assert!(!m.on(), "off after clean increments");
         }

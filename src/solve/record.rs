@@ -159,6 +159,8 @@ pub struct Resume {
     pub dynamic: Option<DynResume>,
     /// What `solver = "auto"` had learned.
     pub auto: Option<crate::solve::nonlinear::auto::AutoState>,
+    /// Whether Armijo backtracking was on (`line_search = "auto"`).
+    pub armijo: crate::solve::armijo::ArmijoState,
 }
 
 /// What an observer wants after a step: go on, or stop here (`alfe run --stop-after`:

@@ -73,8 +73,12 @@ pub fn run_static(
     let mut armijo = ArmijoMemory::new(opts, true);
     let with_armijo = armijo.armijo.clone();
     let mut solver = model_solver(comm, model, opts);
-    if let Some(a) = resume.and_then(|r| r.auto.clone()) {
-        solver.auto = a;
+    if let Some(r) = resume {
+        if let Some(a) = &r.auto {
+            solver.auto = a.clone();
+        }
+        armijo.resume(r.armijo);
+        solver.opts = armijo.pick(opts, &with_armijo);
     }
     let mut tot = RunTotals::default();
     let mut t0 = Instant::now();
@@ -165,6 +169,7 @@ pub fn run_static(
             last_increment: last.clone(),
             dynamic: None,
             auto: Some(solver.auto.clone()),
+            armijo: armijo.state(),
         };
         if on_step(&rec, u, model, &here)? == Flow::Stop {
             tot.stopped = true;

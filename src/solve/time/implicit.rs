@@ -159,6 +159,8 @@ pub fn run_implicit(
             if let Some(a) = &x.auto {
                 run.solver.auto = a.clone();
             }
+            armijo.resume(x.armijo);
+            run.solver.opts = armijo.pick(opts, &with_armijo);
             state.v = d.v.clone();
             state.a = d.a.clone();
             (d.energy.clone(), d.r_old.clone())
@@ -210,6 +212,7 @@ pub fn run_implicit(
                 energy: energy.clone(),
             }),
             auto: Some(run.solver.auto.clone()),
+            armijo: armijo.state(),
         };
         if on_step(&rec, state, model, Some(&here))? == Flow::Stop {
             run.tot.stopped = true;
