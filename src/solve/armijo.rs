@@ -1,17 +1,20 @@
 //! `line_search = "auto"` across increments: when Armijo backtracking replaces full
 //! Newton steps, for the step loops of static and implicit runs.
 //!
-//! * Newton and JFNK: full steps until an attempt fails for a nonlinear reason
-//!   (stagnation, divergence, an element, the iteration budget, stick/slip cycling; not
-//!   a linear solve). Its retries and the increments after it then backtrack on every
-//!   correction, until [`CLEAN_INCREMENTS`] increments in a row converge without a
-//!   backtrack. Full steps fail the same way again and again where the residual is not
-//!   monotone along them: on b-pillar's first 20 mm (contact closing on EAS sheet
-//!   elements) JFNK with full steps took 107 steps and 35 retries, with Armijo 40 steps
-//!   and none. Armijo with no backtrack costs nothing (the full step is its first
-//!   trial), and scenes that converge with full steps (large rotations, where always-on
-//!   backtracking slows Newton) never turn it on.
-//! * `auto` and BFGS (static runs only, as before): the retries of an increment that
+//! * Newton and JFNK: full steps until an attempt fails because full steps do not get
+//!   on (stagnation, divergence, an element that cannot be evaluated). Its retries and
+//!   the increments after it then backtrack on every correction, until
+//!   [`CLEAN_INCREMENTS`] increments in a row converge without a backtrack. Full steps
+//!   fail the same way again and again where the residual is not monotone along them:
+//!   on b-pillar's first 20 mm (contact closing on EAS sheet elements) JFNK with full
+//!   steps took 107 steps and 35 retries, with Armijo 40 steps and none. Armijo with no
+//!   backtrack costs nothing (the full step is its first trial), and scenes that
+//!   converge with full steps (large rotations, where always-on backtracking slows
+//!   Newton) never turn it on. Not after the iteration budget or a linear solve (shorter
+//!   steps only converge slower), and not after stick/slip cycling beyond the retries
+//!   (below): `cylinder-press` with `max_iterations = 4` then failed at the minimum step
+//!   where full steps finish.
+//! * Every method, static runs only (as before): the retries of an increment that
 //!   failed with stick/slip cycling backtrack; the next increment starts with full
 //!   steps again (`auto` has its own Newton-with-line-search fallback).
 
@@ -25,6 +28,8 @@ pub const CLEAN_INCREMENTS: usize = 5;
 pub struct ArmijoState {
     /// Armijo is on now.
     pub on: bool,
+    /// Across increments, not only for retries.
+    pub sticky: bool,
     /// Increments in a row converged without a backtrack while on.
     pub clean: usize,
 }
@@ -36,10 +41,14 @@ pub struct ArmijoMemory {
     /// search to `auto` (one named on or off is never changed).
     pub armijo: NonlinearOptions,
     applies: bool,
-    /// Armijo stays on across increments (Newton, JFNK), not only for retries.
+    /// Newton or JFNK: Armijo can stay on across increments.
     persistent: bool,
+    /// A static run: stick/slip cycling turns Armijo on for the increment's retries.
+    static_run: bool,
     /// Armijo is on now.
     on: bool,
+    /// It stays on across increments (until clean ones), not only for the retries.
+    sticky: bool,
     /// Increments in a row converged without a backtrack while on.
     clean: usize,
 }
@@ -55,7 +64,9 @@ impl ArmijoMemory {
             },
             applies: opts.line_search == LineSearch::Auto && (persistent || static_run),
             persistent,
+            static_run,
             on: false,
+            sticky: false,
             clean: 0,
         }
     }
@@ -69,6 +80,7 @@ impl ArmijoMemory {
     pub fn state(&self) -> ArmijoState {
         ArmijoState {
             on: self.on,
+            sticky: self.sticky,
             clean: self.clean,
         }
     }
@@ -76,6 +88,7 @@ impl ArmijoMemory {
     /// Go on from `s` (a restart).
     pub fn resume(&mut self, s: ArmijoState) {
         self.on = s.on && self.applies;
+        self.sticky = s.sticky && self.on;
         self.clean = s.clean;
     }
 
@@ -95,31 +108,33 @@ impl ArmijoMemory {
 
     /// An attempt failed with `kind`: whether Armijo is on for the retry.
     pub fn failed(&mut self, kind: Option<Failure>) -> bool {
-        let turns_on = if self.persistent {
-            !matches!(kind, Some(Failure::LinearSolver))
-        } else {
-            kind == Some(Failure::StickSlipCycling)
-        };
-        if self.applies && turns_on {
-            self.on = true;
-            self.clean = 0;
+        if !self.applies {
+            return false;
+        }
+        match kind {
+            Some(
+                Failure::Stagnated | Failure::Diverged | Failure::Element | Failure::NonFinite,
+            ) if self.persistent => {
+                self.on = true;
+                self.sticky = true;
+                self.clean = 0;
+            }
+            Some(Failure::StickSlipCycling) if self.static_run => self.on = true,
+            _ => {}
         }
         self.on
     }
 
     /// An increment converged after `backtracks` line-search trials.
     pub fn converged(&mut self, backtracks: usize) {
-        if !self.persistent {
+        if !self.sticky {
             self.on = false;
-            return;
-        }
-        if backtracks > 0 {
+        } else if backtracks > 0 {
             self.clean = 0;
-        } else if self.on {
+        } else {
             self.clean += 1;
             if self.clean >= CLEAN_INCREMENTS {
-                self.on = false;
-                self.clean = 0;
+                (self.on, self.sticky, self.clean) = (false, false, 0);
             }
         }
     }
@@ -137,9 +152,9 @@ mod tests {
         o
     }
 
-    /// Newton and JFNK: a nonlinear failure turns Armijo on (every other option as
-    /// given), a linear one does not; it stays on while increments backtrack and turns
-    /// off after CLEAN_INCREMENTS clean ones in a row.
+    /// Newton and JFNK: stagnation turns Armijo on (every other option as given), a
+    /// linear solve or the iteration budget does not; it stays on while increments
+    /// backtrack and turns off after CLEAN_INCREMENTS clean ones in a row.
     #[test]
     fn newton_and_jfnk_keep_armijo_until_clean_increments() {
         for kind in [SolverKind::Newton, SolverKind::Jfnk] {
@@ -149,6 +164,7 @@ mod tests {
             assert!(ArmijoMemory::new(&given(kind, LineSearch::Auto), true)
                 .failed(Some(Failure::Element)));
             assert!(!m.failed(Some(Failure::LinearSolver)));
+            assert!(!m.failed(Some(Failure::IterationLimit)));
             assert!(m.failed(Some(Failure::Stagnated)));
             let (g, a) = (given(kind, LineSearch::Auto), m.armijo.clone());
             let o = m.pick(&g, &a);
@@ -175,7 +191,7 @@ mod tests {
     }
 
     /// `auto` and BFGS: in static runs only cycling turns it on, for that increment's
-    /// retries; in implicit runs nothing does. A line search the deck names (on or off)
+    /// retries; in implicit runs nothing does. Newton and JFNK alike for cycling. A line search the deck names (on or off)
     /// is never changed.
     #[test]
     fn cycling_only_and_named_line_searches() {
@@ -185,6 +201,18 @@ mod tests {
             assert!(m.failed(Some(Failure::StickSlipCycling)));
             m.converged(4);
             assert!(!m.on());
+            let mut m = ArmijoMemory::new(&given(kind, LineSearch::Auto), false);
+            assert!(
+                !m.failed(Some(Failure::StickSlipCycling)),
+                "{kind:?} implicit"
+            );
+        }
+        // Newton and JFNK too: cycling alone backtracks only in that increment's retries.
+        for kind in [SolverKind::Newton, SolverKind::Jfnk] {
+            let mut m = ArmijoMemory::new(&given(kind, LineSearch::Auto), true);
+            assert!(m.failed(Some(Failure::StickSlipCycling)));
+            m.converged(2);
+            assert!(!m.on(), "{kind:?}");
             let mut m = ArmijoMemory::new(&given(kind, LineSearch::Auto), false);
             assert!(
                 !m.failed(Some(Failure::StickSlipCycling)),
