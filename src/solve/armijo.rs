@@ -37,9 +37,8 @@ pub struct ArmijoState {
 /// What the step loop remembers of the line search (module doc).
 #[derive(Debug, Clone)]
 pub struct ArmijoMemory {
-    /// The run's options with Armijo on every correction, when the deck leaves the line
-    /// search to `auto` (one named on or off is never changed).
-    pub armijo: NonlinearOptions,
+    /// The deck leaves the line search to `auto` (one named on or off is never changed)
+    /// and the method and run take this memory.
     applies: bool,
     /// Newton or JFNK: Armijo can stay on across increments.
     persistent: bool,
@@ -58,16 +57,21 @@ impl ArmijoMemory {
     pub fn new(opts: &NonlinearOptions, static_run: bool) -> Self {
         let persistent = matches!(opts.kind, SolverKind::Newton | SolverKind::Jfnk);
         Self {
-            armijo: NonlinearOptions {
-                line_search: LineSearch::On,
-                ..opts.clone()
-            },
             applies: opts.line_search == LineSearch::Auto && (persistent || static_run),
             persistent,
             static_run,
             on: false,
             sticky: false,
             clean: 0,
+        }
+    }
+
+    /// The run's options `opts` with Armijo on every correction: what
+    /// [`ArmijoMemory::pick`] picks when it is on.
+    pub fn options(opts: &NonlinearOptions) -> NonlinearOptions {
+        NonlinearOptions {
+            line_search: LineSearch::On,
+            ..opts.clone()
         }
     }
 
@@ -92,7 +96,7 @@ impl ArmijoMemory {
         self.clean = s.clean;
     }
 
-    /// The options in force: `armijo` (this memory's [`ArmijoMemory::armijo`]) when on,
+    /// The options in force: `armijo` ([`ArmijoMemory::options`] of `given`) when on,
     /// else the run's `given`.
     pub fn pick<'a>(
         &self,
@@ -160,13 +164,17 @@ mod tests {
         for kind in [SolverKind::Newton, SolverKind::Jfnk] {
             let mut m = ArmijoMemory::new(&given(kind, LineSearch::Auto), false);
             assert!(!m.on());
-            assert_eq!(m.armijo.line_search, LineSearch::On);
+            assert_eq!(
+                ArmijoMemory::options(&given(kind, LineSearch::Auto)).line_search,
+                LineSearch::On
+            );
             assert!(ArmijoMemory::new(&given(kind, LineSearch::Auto), true)
                 .failed(Some(Failure::Element)));
             assert!(!m.failed(Some(Failure::LinearSolver)));
             assert!(!m.failed(Some(Failure::IterationLimit)));
             assert!(m.failed(Some(Failure::Stagnated)));
-            let (g, a) = (given(kind, LineSearch::Auto), m.armijo.clone());
+            let g = given(kind, LineSearch::Auto);
+            let a = ArmijoMemory::options(&g);
             let o = m.pick(&g, &a);
             assert_eq!(
                 (o.line_search, o.kind, o.max_iterations),
@@ -191,8 +199,8 @@ mod tests {
     }
 
     /// `auto` and BFGS: in static runs only cycling turns it on, for that increment's
-    /// retries; in implicit runs nothing does. Newton and JFNK alike for cycling. A line search the deck names (on or off)
-    /// is never changed.
+    /// retries; in implicit runs nothing does. Newton and JFNK alike for cycling. A line
+    /// search the deck names (on or off) is never changed.
     #[test]
     fn cycling_only_and_named_line_searches() {
         for kind in [SolverKind::Auto, SolverKind::Bfgs] {

@@ -66,12 +66,12 @@ pub fn run_static(
     let n = model.n_owned_dofs();
     u.resize(n, 0.0);
     let mut r = vec![0.0; n];
-    // Where line search is left to `auto`: Armijo after failures (`armijo.rs`; with
-    // `auto` and BFGS for the retries of a step that failed with stick/slip cycling,
-    // where full Newton steps carry nodes across the friction cone and back: penalty
-    // friction on the seal finishes only so).
+    // Where line search is left to `auto`: Armijo after failures (`armijo.rs`; for
+    // every method in the retries of a step that failed with stick/slip cycling, where
+    // full Newton steps carry nodes across the friction cone and back: penalty friction
+    // on the seal finishes only so).
     let mut armijo = ArmijoMemory::new(opts, true);
-    let with_armijo = armijo.armijo.clone();
+    let with_armijo = ArmijoMemory::options(opts);
     let mut solver = model_solver(comm, model, opts);
     if let Some(r) = resume {
         if let Some(a) = &r.auto {

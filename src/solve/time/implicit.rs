@@ -149,7 +149,7 @@ pub fn run_implicit(
     let mut ctl = StepControl::new(analysis, opts.max_iterations);
     // Armijo after failures where line search is left to `auto` (`armijo.rs`).
     let mut armijo = ArmijoMemory::new(opts, false);
-    let with_armijo = armijo.armijo.clone();
+    let with_armijo = ArmijoMemory::options(opts);
     let mut run = Implicit::new(comm, model, analysis, opts);
     let t_start = Instant::now();
     let (mut energy, mut r_old) = match resume.and_then(|x| x.dynamic.as_ref().map(|d| (x, d))) {
