@@ -96,6 +96,29 @@ pub fn links(first: SolverKind, incumbent: SolverKind) -> Vec<Variant> {
     l
 }
 
+/// The links an increment tries with their options, without a link that repeats an
+/// earlier one: with `line_search = true` in the deck Newton already is Newton with line
+/// search, and running it again from the same start point fails the same way.
+pub fn distinct(links: &[Variant], base: &NonlinearOptions) -> Vec<(Variant, NonlinearOptions)> {
+    let mut out: Vec<(Variant, NonlinearOptions)> = Vec::new();
+    for &v in links {
+        let o = v.options(base);
+        if !out.iter().any(|(_, p)| same_method(p, &o)) {
+            out.push((v, o));
+        }
+    }
+    out
+}
+
+/// Whether two option sets run the same iteration (BFGS always searches its line).
+fn same_method(a: &NonlinearOptions, b: &NonlinearOptions) -> bool {
+    a.kind == b.kind
+        && match a.kind {
+            SolverKind::Bfgs => a.bfgs_reform == b.bfgs_reform,
+            _ => a.line_search == b.line_search,
+        }
+}
+
 /// A change of method within an increment, and why.
 #[derive(Debug, Clone, serde::Serialize)]
 pub struct Switch {
@@ -407,6 +430,36 @@ mod tests {
             ["bfgs", "bfgs-reformed", "jfnk", "newton+ls"]
         );
         assert_eq!(names(links(Jfnk, Jfnk)), ["jfnk", "newton+ls"]);
+    }
+
+    /// With `line_search = true` Newton with line search repeats Newton and is dropped;
+    /// with BFGS reformed every iteration in the deck, the reformed link repeats BFGS.
+    #[test]
+    fn links_that_repeat_an_earlier_one_are_dropped() {
+        use SolverKind::*;
+        let names = |l: Vec<(Variant, NonlinearOptions)>| {
+            l.iter().map(|(v, _)| v.name()).collect::<Vec<_>>()
+        };
+        let mut base = crate::solve::nonlinear::testing::options(Jfnk);
+        base.line_search = LineSearch::Auto;
+        assert_eq!(
+            names(distinct(&links(Newton, Jfnk), &base)),
+            ["newton", "jfnk", "newton+ls"]
+        );
+        base.line_search = LineSearch::On;
+        assert_eq!(
+            names(distinct(&links(Newton, Jfnk), &base)),
+            ["newton", "jfnk"]
+        );
+        assert_eq!(
+            names(distinct(&links(Bfgs, Bfgs), &base)),
+            ["bfgs", "bfgs-reformed", "newton+ls"]
+        );
+        base.bfgs_reform = 1;
+        assert_eq!(
+            names(distinct(&links(Bfgs, Bfgs), &base)),
+            ["bfgs", "newton+ls"]
+        );
     }
 
     #[test]

@@ -5,7 +5,7 @@
 //! Jacobian assembly, the preconditioned linear solve and the line search are written
 //! once here; a method ([`NonlinearSolver`]: Newton, BFGS, JFNK) provides only its step.
 
-use super::auto::{links, merge, AutoState, Switch};
+use super::auto::{distinct, links, merge, AutoState, Switch};
 use super::common::{Constraints, Eval, Monitor, Verdict};
 use super::{
     Failure, LineSearch, NonlinearOptions, NonlinearProblem, Preconditioning, SolveStats,
@@ -67,22 +67,21 @@ impl<'o> Solver<'o> {
     ) -> Result<SolveStats> {
         let clock = std::time::Instant::now();
         let first = self.auto.choose();
-        let links = links(first, self.auto.incumbent());
+        let links = distinct(&links(first, self.auto.incumbent()), self.opts);
         let u0 = u.to_vec();
         let mut total = SolveStats::default();
-        for (i, link) in links.iter().enumerate() {
+        for (i, (link, opts)) in links.iter().enumerate() {
             if i > 0 {
                 u.copy_from_slice(&u0);
                 self.pc.invalidate();
             }
-            let opts = link.options(self.opts);
-            let st = self.solve_opts(&opts, comm, problem, u, r, prescribed, start)?;
+            let st = self.solve_opts(opts, comm, problem, u, r, prescribed, start)?;
             merge(&mut total, st);
             total.method = link.name();
             if total.converged {
                 break;
             }
-            if let Some(next) = links.get(i + 1) {
+            if let Some((next, _)) = links.get(i + 1) {
                 total.switches.push(Switch {
                     from: link.name(),
                     to: next.name(),
