@@ -92,7 +92,8 @@ impl<'o> Solver<'o> {
         }
         let mut seconds = [clock.elapsed().as_secs_f64()];
         comm.allreduce_max(&mut seconds);
-        self.auto.record(first, seconds[0]);
+        let clean = total.converged && total.switches.is_empty();
+        self.auto.record(first, seconds[0], clean);
         Ok(total)
     }
 
