@@ -164,9 +164,8 @@ fn tensor(s: &[f64; 6]) -> M3 {
     M3::new(s[0], s[3], s[5], s[3], s[1], s[4], s[5], s[4], s[2])
 }
 
-/// τ : l (τ symmetric).
-fn work(s: &[f64; 6], l: &M3) -> f64 {
-    let e = voigt_strain(l);
+/// τ : l (τ symmetric), from sym l in Voigt order (engineering shears).
+fn work(s: &[f64; 6], e: &[f64; 6]) -> f64 {
     s[0] * e[0] + s[1] * e[1] + s[2] * e[2] + s[3] * e[3] + s[4] * e[4] + s[5] * e[5]
 }
 
@@ -332,7 +331,7 @@ impl<const N: usize, const G: usize, const A: usize> Local<'_, N, G, A> {
             let ls: [Factor; A] =
                 std::array::from_fn(|q| Factor::new(&sp, r.modes[g][q] * p.finv[g], finite));
             for a in 0..A {
-                p.ra[a] += r.w[g] * work(&sp.stress, &ls[a].l);
+                p.ra[a] += r.w[g] * work(&sp.stress, &ls[a].e);
                 for q in 0..A {
                     p.kaa[(a, q)] += r.w[g] * bilinear(&ls[a], &ls[q], finite);
                 }

@@ -320,13 +320,7 @@ mod tests {
 
     /// Runs `n` increments whose work is `cost(method)`; the methods that started them.
     fn drive(s: &mut AutoState, n: usize, cost: impl Fn(SolverKind) -> f64) -> Vec<SolverKind> {
-        (0..n)
-            .map(|_| {
-                let k = s.choose();
-                s.record(k, cost(k), true);
-                k
-            })
-            .collect()
+        drive_as(s, n, cost, true)
     }
 
     /// As [`drive`], every increment having fallen back (not clean).
@@ -335,10 +329,19 @@ mod tests {
         n: usize,
         cost: impl Fn(SolverKind) -> f64,
     ) -> Vec<SolverKind> {
+        drive_as(s, n, cost, false)
+    }
+
+    fn drive_as(
+        s: &mut AutoState,
+        n: usize,
+        cost: impl Fn(SolverKind) -> f64,
+        clean: bool,
+    ) -> Vec<SolverKind> {
         (0..n)
             .map(|_| {
                 let k = s.choose();
-                s.record(k, cost(k), false);
+                s.record(k, cost(k), clean);
                 k
             })
             .collect()
