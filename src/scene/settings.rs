@@ -244,6 +244,7 @@ pub(super) fn run_settings(deck: &Deck, timeline: &Timeline) -> RunSettings {
             fd_rule: s.fd_step,
             char_length: 0.0,
             line_search: s.line_search.map(|l| l.setting()).unwrap_or_default(),
+            stagnation_window: None,
             export_system: None,
         },
         output: OutputSettings {

@@ -5,7 +5,7 @@
 //! Jacobian assembly, the preconditioned linear solve and the line search are written
 //! once here; a method ([`NonlinearSolver`]: Newton, BFGS, JFNK) provides only its step.
 
-use super::auto::{distinct, links, merge, AutoState, Switch};
+use super::auto::{distinct, incumbent_link, links, merge, AutoState, Switch};
 use super::common::{Constraints, Eval, Monitor, Verdict};
 use super::{
     Failure, LineSearch, NonlinearOptions, NonlinearProblem, Preconditioning, SolveStats,
@@ -65,23 +65,32 @@ impl<'o> Solver<'o> {
         prescribed: &[(usize, f64)],
         start: Start,
     ) -> Result<SolveStats> {
-        let clock = std::time::Instant::now();
-        let first = self.auto.choose();
-        let links = distinct(&links(first, self.auto.incumbent()), self.opts);
+        let clock = Instant::now();
+        let (first, incumbent) = (self.auto.choose(), self.auto.incumbent());
+        let links = distinct(&links(first, incumbent), self.opts);
         let u0 = u.to_vec();
         let mut total = SolveStats::default();
-        for (i, (link, opts)) in links.iter().enumerate() {
+        let mut i = 0;
+        while let Some((link, opts)) = links.get(i) {
             if i > 0 {
                 u.copy_from_slice(&u0);
                 self.pc.invalidate();
             }
-            let st = self.solve_opts(opts, comm, problem, u, r, prescribed, start)?;
+            let budget = self.auto.budget(first).filter(|_| i == 0);
+            let st = self.solve_opts(opts, comm, problem, u, r, prescribed, start, budget)?;
             merge(&mut total, st);
             total.method = link.name();
             if total.converged {
                 break;
             }
-            if let Some((next, _)) = links.get(i + 1) {
+            // A probe over its budget goes on with the incumbent's chain at once.
+            i = match total.failure {
+                Some(Failure::ProbeBudget) => incumbent_link(&links, incumbent)
+                    .filter(|&j| j > i)
+                    .unwrap_or(i + 1),
+                _ => i + 1,
+            };
+            if let Some((next, _)) = links.get(i) {
                 total.switches.push(Switch {
                     from: link.name(),
                     to: next.name(),
@@ -113,10 +122,11 @@ impl<'o> Solver<'o> {
             kind,
             ..self.opts.clone()
         };
-        self.solve_opts(&opts, comm, problem, u, r, prescribed, start)
+        self.solve_opts(&opts, comm, problem, u, r, prescribed, start, None)
     }
 
-    /// One solve with the options `opts` (their method) on this solver's storage.
+    /// One solve with the options `opts` (their method) on this solver's storage, given
+    /// up after `budget` seconds if one is set.
     #[allow(clippy::too_many_arguments)]
     fn solve_opts(
         &mut self,
@@ -127,9 +137,11 @@ impl<'o> Solver<'o> {
         r: &mut [f64],
         prescribed: &[(usize, f64)],
         start: Start,
+        budget: Option<f64>,
     ) -> Result<SolveStats> {
         let mut method = opts.kind.method(u.len(), opts);
         let mut cx = SolverContext::new(comm, self, opts, problem, u, r, prescribed);
+        cx.budget = budget.map(|b| (Instant::now(), b));
         cx.run(method.as_mut(), start)?;
         let mut stats = cx.stats;
         stats.method = opts.kind.name();
@@ -233,6 +245,8 @@ pub struct SolverContext<'a> {
     full_next: bool,
     /// The predictor's evaluation of the start point, if it made one.
     first: Option<Eval>,
+    /// `auto`'s probe: its start and the seconds it may take.
+    budget: Option<(Instant, f64)>,
 }
 
 impl<'a> SolverContext<'a> {
@@ -262,6 +276,7 @@ impl<'a> SolverContext<'a> {
             scale: 0.0,
             full_next: false,
             first: None,
+            budget: None,
         }
     }
 
@@ -416,6 +431,10 @@ impl<'a> SolverContext<'a> {
                 }
                 Verdict::Continue => {}
             }
+            if let Some(why) = self.over_budget() {
+                self.stats.fail(Failure::ProbeBudget, why);
+                return Ok(());
+            }
             match method.iterate(self, &ev)? {
                 Next::Moved(next) => {
                     ev = next;
@@ -425,6 +444,21 @@ impl<'a> SolverContext<'a> {
                 Next::Stop => return Ok(()),
             }
         }
+    }
+
+    /// Why a probe with a budget stops here: its slowest rank's time is past the
+    /// budget (one reduction, so every rank stops alike).
+    fn over_budget(&self) -> Option<String> {
+        let (t0, budget) = self.budget?;
+        let mut s = [t0.elapsed().as_secs_f64()];
+        self.comm.allreduce_max(&mut s);
+        (s[0] > budget).then(|| {
+            format!(
+                "probe over its budget: {:.3} s, {} times the cheapest method's average increment",
+                s[0],
+                super::auto::PROBE_BUDGET
+            )
+        })
     }
 
     /// Evaluate r(u). `Ok(None)` means the residual could not be evaluated (an inverted

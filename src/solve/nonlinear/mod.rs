@@ -161,6 +161,11 @@ pub struct NonlinearOptions {
     pub char_length: f64,
     /// The backtracking line search on ‖r_free‖ of Newton and JFNK (BFGS always searches).
     pub line_search: LineSearch,
+    /// Iterations without a 10 % fall of the residual after which a solve stagnates;
+    /// `None`: max([`common::STAGNATION_WINDOW`], max_iterations/2). `auto` shortens it
+    /// for a link that has another behind it ([`auto::EARLY_WINDOW`]).
+    #[serde(default)]
+    pub stagnation_window: Option<usize>,
     /// Write the run's first Newton linear system here (`alfe run --export-system`:
     /// [`crate::linalg::export`]).
     pub export_system: Option<std::path::PathBuf>,
@@ -213,6 +218,9 @@ pub enum Failure {
     StickSlipCycling,
     /// Explicit dynamics: the stable time step collapsed or fell below a fixed one.
     TimeStep,
+    /// `auto`: a probe ran past its time budget ([`auto::PROBE_BUDGET`]); the
+    /// increment goes on with the cheapest method's chain.
+    ProbeBudget,
 }
 
 impl Failure {
@@ -227,6 +235,7 @@ impl Failure {
             Failure::LinearSolver => "linear-solver",
             Failure::StickSlipCycling => "stick-slip-cycling",
             Failure::TimeStep => "time-step",
+            Failure::ProbeBudget => "probe-budget",
         }
     }
 }

@@ -81,6 +81,7 @@ pub fn options(kind: SolverKind) -> NonlinearOptions {
         fd_rule: super::FdRule::Element,
         char_length: 1.0,
         line_search: super::LineSearch::Off,
+        stagnation_window: None,
         export_system: None,
     }
 }
