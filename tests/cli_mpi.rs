@@ -481,6 +481,63 @@ fn twisted_block_all_solvers_on_one_and_two_ranks() {
     }
 }
 
+/// `solver = "auto"` end to end on clip-tensile, 1 and 2 ranks. The first increment's
+/// full JFNK steps wander near a relative residual of 1 (the clip settling on the pins):
+/// they give way within `auto`'s early window (6 iterations) and JFNK with line search
+/// finishes the increment from its start point, a switch logged with its reason in
+/// `iterations.csv` and counted in `summary.json`; every increment is counted once, by
+/// the method that finished it. Both runs reach the end without a cut and their final
+/// pin forces agree to the solver's tolerance (the methods chosen later follow measured
+/// times, so the runs need not agree bit for bit; measured 2e-9).
+#[test]
+fn auto_falls_back_within_an_increment_on_one_and_two_ranks() {
+    let dir = temp_dir("rank-auto");
+    let runs = same_on_one_and_two(
+        &dir,
+        Ranks {
+            args: &["--solver", "auto", "--iterations"],
+            tag: "a",
+            compare: false,
+            ..Ranks::scene("clip-tensile")
+        },
+    );
+    for out in [&runs.one, &runs.two] {
+        let s = read_json(&out.join("summary.json"));
+        assert_eq!(s["converged"], true, "{s}");
+        assert_eq!(s["solver"], "auto");
+        assert_eq!(s["retries"], 0, "{s}");
+        let c = &s["solver_counts"];
+        assert!(c["switches"]["jfnk → jfnk+ls"].as_u64() >= Some(1), "{c}");
+        let by: u64 = c["increments_by_method"]
+            .as_object()
+            .unwrap()
+            .values()
+            .map(|v| v.as_u64().unwrap())
+            .sum();
+        assert_eq!(Some(by), s["steps"].as_u64(), "{c}");
+        let csv = std::fs::read_to_string(out.join("iterations.csv")).unwrap();
+        let first: Vec<&str> = csv.lines().filter(|l| l.starts_with("1,1,")).collect();
+        let at = first
+            .iter()
+            .position(|l| l.contains("switch to jfnk+ls: stagnated"))
+            .unwrap_or_else(|| panic!("no switch in the first increment:\n{csv}"));
+        assert!(first[at].contains("in 6 iterations") && first[at].ends_with(",jfnk"));
+        assert!(first[..at].iter().all(|l| l.ends_with(",jfnk")));
+        assert!(first[at + 1..].iter().all(|l| l.ends_with(",jfnk+ls")));
+        assert!(first.last().unwrap().contains(",converged,jfnk+ls"));
+    }
+    for name in ["lower_pin", "upper_pin"] {
+        let last = |h: &[Vec<String>], c: &str| *column(h, &format!("{name}.{c}")).last().unwrap();
+        let scale = ["fx", "fy", "fz"]
+            .iter()
+            .fold(0.0f64, |m, c| m.max(last(&runs.h1, c).abs()));
+        for c in ["fx", "fy", "fz"] {
+            let (a, b) = (last(&runs.h1, c), last(&runs.h2, c));
+            assert!((a - b).abs() <= 1e-6 * scale, "{name}.{c}: {a} vs {b}");
+        }
+    }
+}
+
 same_on_one_and_two_ranks! {
     /// A prescribed stretch whose constrained faces lie on both ranks.
     prescribed_stretch_same_on_one_and_two_ranks: Ranks::scene("cube-stretch");
