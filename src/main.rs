@@ -315,8 +315,13 @@ fn main_inner(comm: &dyn Comm, raw: Vec<String>) -> Result<()> {
             Ok(())
         }
         Command::Scenes => {
+            let w = alfe::scene::BUILTIN
+                .iter()
+                .map(|b| b.0.len())
+                .max()
+                .unwrap_or(0);
             for (name, desc, _) in alfe::scene::BUILTIN {
-                say(&format!("{name:<14} {desc}"));
+                say(&format!("{name:<w$} {desc}"));
             }
             Ok(())
         }

@@ -393,7 +393,7 @@ pub fn report(values: &[QuantityValue]) -> Vec<String> {
                     s.push_str(&if abs {
                         format!(", error {e:.3e}")
                     } else {
-                        format!(", error {:+.3} %", 100.0 * e)
+                        format!(", error {} %", signed_percent(e))
                     });
                 }
                 if let Some(t) = q.tolerance {
@@ -428,8 +428,26 @@ fn percent(t: f64) -> String {
     s.trim_end_matches('0').trim_end_matches('.').to_string()
 }
 
+/// An error as a signed percentage: three decimals, or two digits of exponent below
+/// 0.001 % (not "-0.000 %" for an error of 1e-9).
+fn signed_percent(e: f64) -> String {
+    let p = 100.0 * e;
+    if p != 0.0 && p.abs() < 1e-3 {
+        format!("{p:+.1e}")
+    } else {
+        format!("{p:+.3}")
+    }
+}
+
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn errors_print_with_their_sign_and_size() {
+        assert_eq!(super::signed_percent(-1.2e-9), "-1.2e-7");
+        assert_eq!(super::signed_percent(0.01234), "+1.234");
+        assert_eq!(super::signed_percent(0.0), "+0.000");
+    }
+
     #[test]
     fn tolerances_print_as_written() {
         assert_eq!(super::percent(1e-6), "1e-4");
