@@ -315,14 +315,7 @@ fn main_inner(comm: &dyn Comm, raw: Vec<String>) -> Result<()> {
             Ok(())
         }
         Command::Scenes => {
-            let w = alfe::scene::BUILTIN
-                .iter()
-                .map(|b| b.0.len())
-                .max()
-                .unwrap_or(0);
-            for (name, desc, _) in alfe::scene::BUILTIN {
-                say(&format!("{name:<w$} {desc}"));
-            }
+            say(&scene_list());
             Ok(())
         }
         Command::Scene {
@@ -467,4 +460,18 @@ fn main() {
     drop(comm);
     drop(universe);
     std::process::exit(code);
+}
+
+/// `alfe scenes`: one line per built-in scene, names aligned to the longest.
+fn scene_list() -> String {
+    let w = alfe::scene::BUILTIN
+        .iter()
+        .map(|b| b.0.len())
+        .max()
+        .unwrap_or(0);
+    let lines: Vec<String> = alfe::scene::BUILTIN
+        .iter()
+        .map(|(name, desc, _)| format!("{name:<w$} {desc}"))
+        .collect();
+    lines.join("\n")
 }
