@@ -83,11 +83,16 @@ impl<'o> Solver<'o> {
             if total.converged {
                 break;
             }
-            // A probe over its budget goes on with the incumbent's chain at once.
+            // A probe over its budget goes on with the incumbent's chain at once. An
+            // element that cannot be evaluated ends the chain: the step is too large for
+            // the element's own solve (EAS, return mapping) wherever the global method
+            // goes, and the step is cut as a named solver's would be (panel-dent: chains
+            // of three links failing at elements cost a third of `auto`'s run).
             i = match total.failure {
                 Some(Failure::ProbeBudget) => incumbent_link(&links, incumbent)
                     .filter(|&j| j > i)
                     .unwrap_or(i + 1),
+                Some(Failure::Element) => links.len(),
                 _ => i + 1,
             };
             if let Some((next, _)) = links.get(i) {

@@ -15,6 +15,8 @@ pub struct Toy {
     pub f: f64,
     /// The Jacobian returned is this multiple of the true one (a wrong tangent).
     pub jscale: f64,
+    /// An "element" that cannot be evaluated from this many residual evaluations on.
+    pub fail_after: usize,
     pub residuals: Vec<[f64; 3]>,
     pub jacobians: Vec<[f64; 3]>,
 }
@@ -26,6 +28,7 @@ impl Toy {
             a,
             f,
             jscale: 1.0,
+            fail_after: usize::MAX,
             residuals: Vec::new(),
             jacobians: Vec::new(),
         }
@@ -45,6 +48,11 @@ fn point(u: &[f64]) -> [f64; 3] {
 impl NonlinearProblem for Toy {
     fn residual(&mut self, _: &dyn Comm, u: &[f64], r: &mut [f64]) -> Result<f64> {
         self.residuals.push(point(u));
+        if self.residuals.len() > self.fail_after {
+            return Err(crate::Error::convergence(
+                "the toy's spring is overstretched",
+            ));
+        }
         let (s1, s2) = (self.s(u[1] - u[0]), self.s(u[2] - u[1]));
         r[0] = -s1;
         r[1] = s1 - s2;
