@@ -32,9 +32,10 @@
 //! fallback) measure the problem's own drift, and the other averages move with them
 //! ([`AutoState::record`]). A link that would repeat an earlier one is skipped
 //! ([`distinct`]); a full-step Newton or JFNK link with a fallback behind it stagnates
-//! early ([`EARLY_WINDOW`]); a clean probe's cost replaces its method's stale average; an exploring or probing method that runs past
-//! [`PROBE_BUDGET`] times the cheapest's average increment gives way to the cheapest's
-//! chain. An element that cannot be evaluated ends the chain (the step is cut).
+//! early ([`EARLY_WINDOW`]); a clean probe's cost replaces its method's stale average;
+//! an exploring or probing method that runs past [`PROBE_BUDGET`] times the cheapest's
+//! average increment gives way to the cheapest's chain. An element that cannot be
+//! evaluated ends the chain (the step is cut).
 
 use super::{LineSearch, NonlinearOptions, SolveStats, SolverKind};
 
@@ -134,8 +135,9 @@ pub fn distinct(links: &[Variant], base: &NonlinearOptions) -> Vec<(Variant, Non
 }
 
 /// Iterations without a 10 % fall of the relative residual after which a full-step
-/// Newton or JFNK link gives way to the next link (the named solvers wait max(8, half the budget)). Measured on the `--iterations` histories of the ten calibration scenes and
-/// of b-pillar (JFNK, 288 solves): a window of 6 never stopped a full-step Newton or
+/// Newton or JFNK link gives way to the next link (the named solvers wait max(8, half
+/// the budget)). Measured on the `--iterations` histories of the ten calibration scenes
+/// and of b-pillar (JFNK, 288 solves): a window of 6 never stopped a full-step Newton or
 /// JFNK solve that went on to converge, 5 stopped one on b-pillar, and with backtracking
 /// (Armijo) or BFGS 6 stopped solves that would have converged (b-pillar, seal,
 /// sphere-roll, clip-tensile), so those keep the named solvers' window. On clip-tensile's
@@ -293,10 +295,11 @@ impl AutoState {
     /// which is stale: on b-pillar Newton's probes of 0.65-1.0 s against BFGS's 1.2 s
     /// increments moved an average raised by the contact closing's fallbacks too little,
     /// and BFGS kept 50 increments Newton would have taken cheaper. When the cheapest
-    /// method's clean increments grow dearer or cheaper, the problem did (sphere-roll's rolling costs four times its pressing),
-    /// so the other methods' averages, measured earlier, move by the same factor: compared
-    /// with the pressing's cheap increments, BFGS and Newton looked cheaper than JFNK
-    /// rolling and started 9 of its 24 rolling increments.
+    /// method's clean increments grow dearer or cheaper, the problem did (sphere-roll's
+    /// rolling costs four times its pressing), so the other methods' averages, measured
+    /// earlier, move by the same factor: compared with the pressing's cheap increments,
+    /// BFGS and Newton looked cheaper than JFNK rolling and started 9 of its 24 rolling
+    /// increments.
     pub fn record(&mut self, kind: SolverKind, work: f64, clean: bool) {
         if self.increments < WARM_UP {
             self.increments += 1;
@@ -575,24 +578,12 @@ mod tests {
     /// short the step) ends the chain: one link, no switch, the increment is cut.
     #[test]
     fn an_element_failure_ends_the_chain() {
-        use crate::parallel::SerialComm;
-        use crate::solve::nonlinear::testing::{options, solver, Toy};
+        use crate::solve::nonlinear::testing::{options, solve, Toy};
         use crate::solve::nonlinear::Start;
-        let opts = options(SolverKind::Auto);
-        let mut s = solver(&opts);
         let mut toy = Toy::new(0.0, 1.0, 0.5);
         toy.fail_after = 2;
-        let (mut u, mut r) = ([0.0, 3.0, 6.0], [0.0; 3]);
-        let st = s
-            .solve(
-                &SerialComm,
-                &mut toy,
-                &mut u,
-                &mut r,
-                &[(0, 0.0)],
-                Start::Tangent,
-            )
-            .unwrap();
+        let opts = options(SolverKind::Auto);
+        let st = solve(&opts, &mut toy, &mut [0.0, 3.0, 6.0], 0.0, Start::Tangent);
         assert!(!st.converged);
         assert_eq!(
             st.failure,
