@@ -173,6 +173,7 @@ impl StudyArgs {
             refine: self.refine,
             step_scale: self.step_scale,
             penalty_scale: self.penalty_scale,
+            contact: None,
             preconditioner: self.preconditioner,
             overlap: self.overlap,
         }
@@ -295,7 +296,6 @@ fn main_inner(comm: &dyn Comm, raw: Vec<String>) -> Result<()> {
                 (None, None) => alfe::scene::DEFAULT_SCENE.to_string(),
             };
             let opts = RunOptions {
-                contact: a.contact.map(ContactArg::method),
                 target: deck,
                 out: a.out,
                 partitions: a
@@ -307,7 +307,10 @@ fn main_inner(comm: &dyn Comm, raw: Vec<String>) -> Result<()> {
                 iterations: a.iterations,
                 restart: a.restart,
                 stop_after: a.stop_after.map(|n| n as usize),
-                overrides: a.study.overrides(),
+                overrides: alfe::scene::Overrides {
+                    contact: a.contact.map(ContactArg::method),
+                    ..a.study.overrides()
+                },
                 export_system: a.export_system,
             };
             let s = app::run(comm, &opts)?.summary;

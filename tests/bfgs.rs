@@ -32,7 +32,6 @@ fn solve_with(
     }
     comm.barrier();
     let ro = RunOptions {
-        contact: None,
         target: deck.display().to_string(),
         out: Some(dir.join("out")),
         partitions: dir.join("partitions"),

@@ -93,7 +93,6 @@ fn run_in(name: &str, text: &str, contact: Option<ContactMethod>) -> (RunOutcome
     std::fs::write(&path, text).unwrap();
     let out = dir.join("out");
     let opts = RunOptions {
-        contact,
         target: path.display().to_string(),
         out: Some(out.clone()),
         partitions: dir.join("partitions"),
@@ -103,7 +102,10 @@ fn run_in(name: &str, text: &str, contact: Option<ContactMethod>) -> (RunOutcome
         iterations: false,
         restart: None,
         stop_after: None,
-        overrides: alfe::scene::Overrides::default(),
+        overrides: alfe::scene::Overrides {
+            contact,
+            ..Default::default()
+        },
         export_system: None,
     };
     let o = run(&SerialComm, &opts).unwrap_or_else(|e| panic!("{name}: {e}"));

@@ -194,7 +194,6 @@ fn a_busy_output_directory_is_refused() {
     )
     .unwrap();
     let opts = alfe::app::RunOptions {
-        contact: None,
         target: deck.display().to_string(),
         out: Some(out.clone()),
         partitions: dir.join("partitions"),

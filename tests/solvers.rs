@@ -25,7 +25,6 @@ fn run_with(name: &str, text: &str, solver: SolverKind) -> alfe::app::RunOutcome
     let dir = temp_dir(name);
     std::fs::write(dir.join("deck.toml"), text).unwrap();
     let opts = alfe::app::RunOptions {
-        contact: None,
         target: dir.join("deck.toml").display().to_string(),
         out: Some(dir.join("out")),
         partitions: dir.join("parts"),

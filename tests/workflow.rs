@@ -391,29 +391,32 @@ fn a_restarted_run_gives_the_uninterrupted_answer() {
     assert!(se.contains("rank"), "{se}");
 }
 
-/// Penalty friction's state survives a restart: `sliding-block` with a penalty floor
+/// Penalty friction's state survives a restart: `sliding-block --contact penalty`
 /// (elastic slip carried between steps; step 11 is retried and softens the stick of the
 /// nodes that cycled there) stopped after step 12 and restarted gives the uninterrupted
-/// run's history within 1e-10, on 1 and 2 ranks.
+/// run's history within 1e-10, on 1 and 2 ranks. The restart is not told `--contact`:
+/// the run's `deck.toml` says `method = "penalty"` (it used to keep the deck's ALM, and
+/// the restart was refused as "another partition of the model").
 #[test]
 fn a_restarted_penalty_run_keeps_its_elastic_slip() {
     let dir = scratch("restart-penalty");
-    let deck = edit(
-        &builtin("sliding-block"),
-        "friction = 0.3",
-        "friction = 0.3\nmethod = \"penalty\"",
-    );
-    std::fs::write(dir.join("pen.toml"), deck).unwrap();
     for ranks in [1, 2] {
         let (full, part) = (format!("full-{ranks}"), format!("part-{ranks}"));
         let parts = ["--partitions", "parts"];
+        let pen = ["sliding-block", "--contact", "penalty", "-q"];
         ok(alfe(
             &dir,
             ranks,
-            &[&["pen.toml", "-q", "-o", &full], &parts[..]].concat(),
+            &[&pen[..], &["-o", &full], &parts[..]].concat(),
         ));
-        let stop = ["pen.toml", "-q", "-o", &part, "--stop-after", "12"];
-        ok(alfe(&dir, ranks, &[&stop[..], &parts[..]].concat()));
+        let stop = ["-o", &part, "--stop-after", "12"];
+        ok(alfe(
+            &dir,
+            ranks,
+            &[&pen[..], &stop[..], &parts[..]].concat(),
+        ));
+        let record = read(&dir.join(&part).join("deck.toml"));
+        assert!(record.contains("method = \"penalty\""), "{record}");
         ok(alfe(
             &dir,
             ranks,

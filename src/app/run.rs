@@ -43,8 +43,6 @@ pub struct RunOptions {
     pub quiet: bool,
     /// Override the deck's nonlinear solver (`--solver`).
     pub solver: Option<SolverKind>,
-    /// Switch every wall's enforcement (`--contact alm|penalty`).
-    pub contact: Option<crate::contact::wall::ContactMethod>,
     /// Write `iterations.csv` (`--iterations`; also the deck's `[output] iterations`).
     pub iterations: bool,
     /// Go on from the restart files of an earlier run's output directory.
@@ -67,7 +65,6 @@ impl RunOptions {
             repartition: false,
             quiet: false,
             solver: None,
-            contact: None,
             iterations: false,
             restart: None,
             stop_after: None,
@@ -89,21 +86,16 @@ pub struct Setup {
 }
 
 /// Collective: read and partition on rank 0, give each rank its piece and the run
-/// settings (with `--solver` and `--contact` applied, and the FD length of the mesh).
+/// settings (with `--solver` applied, and the FD length of the mesh).
 pub fn setup(comm: &dyn Comm, opts: &RunOptions, phases: &mut Phases) -> Result<Setup> {
     let t0 = Instant::now();
     let mut t_part = 0.0;
     let pieces = on_rank0(comm, || {
         let src = crate::scene::load(&opts.target)?;
         let Scene {
-            model: mut def,
+            model: def,
             mut run,
         } = crate::scene::read_with(&src, &opts.overrides)?;
-        if let Some(m) = opts.contact {
-            for c in &mut def.contributions {
-                c.kind_mut().set_contact_method(m);
-            }
-        }
         if let Some(k) = opts.solver {
             run.solver.kind = k;
         }

@@ -243,11 +243,6 @@ macro_rules! contribution_kinds {
                     $(ContributionDef::$variant(d) => d),*
                 }
             }
-            pub fn kind_mut(&mut self) -> &mut dyn ContributionKind {
-                match self {
-                    $(ContributionDef::$variant(d) => d),*
-                }
-            }
             /// This rank's share (local node indices).
             pub fn localize(&self, l: &Localizer) -> Self {
                 match self {

@@ -4,7 +4,6 @@
 
 use super::local::{LocalElements, LocalMesh};
 use super::Contribution;
-use crate::contact::wall::ContactMethod;
 
 /// Every rank's view of the partition while it localizes a definition.
 pub struct Localizer<'a> {
@@ -58,6 +57,4 @@ pub trait ContributionKind {
         Self: Sized;
     /// The runtime contribution on this rank, from its localized definition.
     fn build(&self, mesh: &LocalMesh, elements: &LocalElements) -> Box<dyn Contribution>;
-    /// `--contact alm|penalty`: switch its enforcement, if it has one.
-    fn set_contact_method(&mut self, _m: ContactMethod) {}
 }

@@ -180,13 +180,6 @@ impl ContributionKind for PairsDef {
     fn build(&self, _mesh: &LocalMesh, _elements: &LocalElements) -> Box<dyn Contribution> {
         Box::new(Pairs::new(self.clone()))
     }
-    /// Switches a contact's enforcement; a bolt's section stays ALM (a penalty tie
-    /// lets the section creep: 6 % on `tests/bolt-bar.toml`).
-    fn set_contact_method(&mut self, m: ContactMethod) {
-        if self.pretension.is_none() {
-            self.method = m;
-        }
-    }
 }
 
 impl PairsDef {

@@ -1,8 +1,11 @@
 //! Changes a study makes to a deck without editing it (`alfe run --refine K
-//! --step-scale F --penalty-scale S`, issue 17): the same scene on a finer mesh, with
-//! other increments, or with another penalty stiffness.
+//! --step-scale F --contact M --penalty-scale S`, issue 17): the same scene on a finer
+//! mesh, with other increments, another contact enforcement or penalty stiffness. They
+//! are made to the deck, so the run's `deck.toml` is the deck as run and a restart from
+//! it builds the same model.
 
 use super::deck::{Deck, MeshDeck};
+use crate::contact::wall::ContactMethod;
 use crate::{Error, Result};
 
 /// What to change; the default changes nothing.
@@ -17,6 +20,10 @@ pub struct Overrides {
     pub step_scale: f64,
     /// The penalty stiffness of every wall, entity and pair (`penalty_scale`), where set.
     pub penalty_scale: Option<f64>,
+    /// The enforcement of every wall, entity and pair (`--contact`), where set; a bolt's
+    /// section stays ALM (a penalty tie lets the section creep: 6 % on
+    /// `tests/bolt-bar.toml`).
+    pub contact: Option<ContactMethod>,
     /// `[solver.linear] preconditioner` and `overlap`, where set (`--preconditioner`,
     /// `--overlap`): the scaling study runs one deck with each.
     pub preconditioner: Option<crate::linalg::PcKind>,
@@ -29,6 +36,7 @@ impl Default for Overrides {
             refine: 1,
             step_scale: 1.0,
             penalty_scale: None,
+            contact: None,
             preconditioner: None,
             overlap: None,
         }
@@ -123,6 +131,14 @@ impl Overrides {
         if let Some(o) = self.overlap {
             deck.solver.linear.overlap = o;
         }
+        if let Some(m) = self.contact {
+            for w in deck.walls.iter_mut().chain(deck.entities.iter_mut()) {
+                w.method = m;
+            }
+            for pr in &mut deck.pairs {
+                pr.method = m;
+            }
+        }
         if let Some(p) = self.penalty_scale {
             for w in deck.walls.iter_mut().chain(deck.entities.iter_mut()) {
                 w.penalty_scale = p;
@@ -132,5 +148,42 @@ impl Overrides {
             }
         }
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::def::ContributionDef;
+
+    /// `--contact penalty` is made to the deck: the echo (`deck.toml`) says it, so a
+    /// restart from it builds the same model; a bolt's section stays ALM.
+    #[test]
+    fn contact_is_set_in_the_deck_and_bolts_stay_alm() {
+        let src = crate::scene::load("bolted-bracket").unwrap();
+        let o = Overrides {
+            contact: Some(ContactMethod::Penalty),
+            ..Default::default()
+        };
+        let scene = crate::scene::read_with(&src, &o).unwrap();
+        let echo = crate::scene::deck::parse(&scene.run.echo).unwrap();
+        assert!(!echo.pairs.is_empty() && !echo.bolts.is_empty());
+        assert!(echo
+            .pairs
+            .iter()
+            .all(|p| p.method == ContactMethod::Penalty));
+        let (mut bolts, mut pairs) = (0, 0);
+        for c in &scene.model.contributions {
+            if let ContributionDef::Pairs(p) = c {
+                if p.pretension.is_some() {
+                    bolts += 1;
+                    assert_eq!(p.method, ContactMethod::Alm, "{}", p.name);
+                } else {
+                    pairs += 1;
+                    assert_eq!(p.method, ContactMethod::Penalty, "{}", p.name);
+                }
+            }
+        }
+        assert_eq!((bolts, pairs), (echo.bolts.len(), echo.pairs.len()));
     }
 }

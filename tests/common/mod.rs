@@ -44,7 +44,6 @@ pub fn run_deck_file(name: &str, deck: &std::path::Path) -> RunOutcome {
 
 fn try_run_deck_file(dir: &std::path::Path, deck: &std::path::Path) -> alfe::Result<RunOutcome> {
     let opts = RunOptions {
-        contact: None,
         target: deck.display().to_string(),
         out: Some(dir.join("out")),
         partitions: dir.join("partitions"),

@@ -156,9 +156,6 @@ impl ContributionKind for WallDef {
     fn build(&self, mesh: &LocalMesh, _elements: &LocalElements) -> Box<dyn Contribution> {
         Box::new(Wall::new(self.clone(), &mesh.coords, mesh.rank))
     }
-    fn set_contact_method(&mut self, m: ContactMethod) {
-        self.method = m;
-    }
 }
 
 impl WallDef {
