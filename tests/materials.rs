@@ -152,10 +152,13 @@ fn cook_membrane_converges_to_the_published_band_and_plain_hex8_locks() {
     for w in errs.windows(2) {
         assert!(w[1] < w[0], "error must fall under refinement: {errs:?}");
     }
-    // The reduced hex8 (one point, hourglass spring) converges to the same band.
-    let reduced = [cook([8, 8, 2], "reduced"), cook([24, 24, 4], "reduced")];
+    // The reduced hex8 (one point, hourglass spring) converges to the same band: 20×20×2
+    // gives 8.373 in 38 Newton iterations (2 s); the built-in 24×24×4 gives 8.409 but
+    // takes 643 iterations and 53 increments (158 s: one-point volumetric stiffness at
+    // K/μ = 5000, the reason the scene is hybrid), too slow for the suite.
+    let reduced = [cook([8, 8, 2], "reduced"), cook([20, 20, 2], "reduced")];
     eprintln!(
-        "Cook reduced: 8×8×2 {:.4}, 24×24×4 {:.4}",
+        "Cook reduced: 8×8×2 {:.4}, 20×20×2 {:.4}",
         reduced[0], reduced[1]
     );
     assert!(
