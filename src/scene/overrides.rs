@@ -131,21 +131,14 @@ impl Overrides {
         if let Some(o) = self.overlap {
             deck.solver.linear.overlap = o;
         }
-        if let Some(m) = self.contact {
-            for w in deck.walls.iter_mut().chain(deck.entities.iter_mut()) {
-                w.method = m;
-            }
-            for pr in &mut deck.pairs {
-                pr.method = m;
-            }
+        let (m, p) = (self.contact, self.penalty_scale);
+        for w in deck.walls.iter_mut().chain(deck.entities.iter_mut()) {
+            w.method = m.unwrap_or(w.method);
+            w.penalty_scale = p.unwrap_or(w.penalty_scale);
         }
-        if let Some(p) = self.penalty_scale {
-            for w in deck.walls.iter_mut().chain(deck.entities.iter_mut()) {
-                w.penalty_scale = p;
-            }
-            for pr in &mut deck.pairs {
-                pr.penalty_scale = p;
-            }
+        for pr in &mut deck.pairs {
+            pr.method = m.unwrap_or(pr.method);
+            pr.penalty_scale = p.unwrap_or(pr.penalty_scale);
         }
         Ok(())
     }
